@@ -1,0 +1,55 @@
+# Two commands do all the setup: `make test` and `make reproduce`.
+PYTHON ?= python3.11
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+# Debian libraries that open3d needs at import time on a fresh machine.
+SYSTEM_LIBS := libusb-1.0-0 libgomp1
+NB := $(sort $(wildcard notebooks/*.ipynb))
+
+.PHONY: test unit notebooks reproduce bench system-deps clean
+
+test: unit notebooks
+
+system-deps:
+	@missing=""; \
+	for lib in $(SYSTEM_LIBS); do dpkg -s $$lib >/dev/null 2>&1 || missing="$$missing $$lib"; done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = "0" ]; then \
+	    echo "installing system libraries:$$missing"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
+	  else \
+	    echo "open3d needs system libraries that are missing. Run:"; \
+	    echo "  sudo apt-get install -y$$missing"; \
+	    exit 1; \
+	  fi; \
+	fi
+
+$(STAMP): pyproject.toml | system-deps
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need $(PYTHON) (Python 3.11) on PATH"; exit 1; }
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e ".[test]"
+	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
+	touch $(STAMP)
+
+unit: system-deps $(STAMP)
+	$(PY) -m pytest -q tests
+
+# Every notebook under nbval in fast mode; fast mode writes under build/, never data/results/.
+notebooks: system-deps $(STAMP)
+	MAVAC_FAST=1 $(PY) -m pytest -q --nbval-lax --nbval-current-env -p no:cacheprovider $(NB)
+
+# Paper scale: writes figures/ and data/results/. Executed copies go to build/executed.
+reproduce: system-deps $(STAMP)
+	mkdir -p build/executed
+	for nb in $(NB); do \
+	  MAVAC_FAST=0 $(VENV)/bin/jupyter nbconvert --to notebook --execute \
+	    --ExecutePreprocessor.timeout=-1 --output-dir build/executed "$$nb" || exit 1; \
+	done
+
+bench: system-deps $(STAMP)
+	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
+
+clean:
+	rm -rf build .pytest_cache
