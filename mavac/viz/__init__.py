@@ -1,0 +1,1 @@
+"""Rendering: meshcat scenes saved as self-contained static HTML, matplotlib helpers."""

@@ -1,0 +1,111 @@
+"""meshcat scenes of machines, parts and robots, exported as self-contained static HTML.
+
+``meshcat.Visualizer()`` starts a server subprocess; :func:`scene` always terminates it
+(``Visualizer.close`` is broken in meshcat 0.3.2: its window has no ``close``), so no test
+or notebook leaves a server running.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import subprocess
+
+import numpy as np
+
+from ..io import write_text
+
+
+def _rgb_int(color) -> int:
+    r, g, b = (int(round(255 * float(c))) for c in color[:3])
+    return (r << 16) + (g << 8) + b
+
+
+@contextlib.contextmanager
+def scene():
+    """A fresh meshcat visualizer whose server is shut down on exit, even on error."""
+    import meshcat
+
+    vis = meshcat.Visualizer()
+    try:
+        yield vis
+    finally:
+        shutdown(vis)
+
+
+def shutdown(vis) -> None:
+    """Terminate the meshcat server subprocess of ``vis`` and close its socket."""
+    window = vis.window
+    proc = getattr(window, "server_proc", None)
+    with contextlib.suppress(Exception):
+        window.zmq_socket.close(linger=0)
+    if proc is not None and proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=5)
+
+
+def add_mesh(vis, name: str, mesh, color=(0.7, 0.7, 0.7), opacity: float = 1.0, world_T_mesh=None) -> None:
+    """Add a trimesh mesh (metres) under ``name``."""
+    import meshcat.geometry as g
+
+    geom = g.TriangularMeshGeometry(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.uint32))
+    material = g.MeshLambertMaterial(color=_rgb_int(color), opacity=opacity, transparent=opacity < 1.0)
+    vis[name].set_object(geom, material)
+    if world_T_mesh is not None:
+        vis[name].set_transform(np.asarray(world_T_mesh, float))
+
+
+def add_points(vis, name: str, points, colors=None, size: float = 0.01) -> None:
+    """Add a point cloud; ``colors`` is (3,) or (n, 3) in [0, 1]."""
+    import meshcat.geometry as g
+
+    pts = np.asarray(points, float).reshape(-1, 3)
+    if colors is None:
+        colors = (0.1, 0.4, 0.9)
+    cols = np.broadcast_to(np.asarray(colors, float), pts.shape)
+    vis[name].set_object(g.PointCloud(pts.T, cols.T, size=size))
+
+
+def add_lines(vis, name: str, starts, ends, color=(0.9, 0.1, 0.1)) -> None:
+    """Add line segments from ``starts`` (n, 3) to ``ends`` (n, 3)."""
+    import meshcat.geometry as g
+
+    s = np.asarray(starts, float).reshape(-1, 3)
+    e = np.asarray(ends, float).reshape(-1, 3)
+    seg = np.empty((2 * len(s), 3))
+    seg[0::2], seg[1::2] = s, e
+    vis[name].set_object(g.LineSegments(g.PointsGeometry(seg.T), g.LineBasicMaterial(color=_rgb_int(color))))
+
+
+def add_triad(vis, name: str, world_T_frame, length: float = 0.1) -> None:
+    """Add an RGB (x, y, z) axis triad at ``world_T_frame`` (4, 4)."""
+    import meshcat.geometry as g
+
+    vis[name].set_object(g.triad(length))
+    vis[name].set_transform(np.asarray(world_T_frame, float))
+
+
+def add_robot(vis, name: str, robot, q, world_T_base=None, collision: bool = False) -> None:
+    """Add a :class:`mavac.robots.models.RobotModel` at configuration ``q`` (nq,).
+
+    Uses pinocchio's MeshcatVisualizer on the visual (or collision) geometry.
+    """
+    from pinocchio.visualize import MeshcatVisualizer
+
+    viz = MeshcatVisualizer(robot.model, robot.collision_model, robot.visual_model)
+    viz.initViewer(viewer=vis)
+    viz.loadViewerModel(rootNodeName=name)
+    if collision:
+        viz.displayCollisions(True)
+        viz.displayVisuals(False)
+    viz.display(np.asarray(q, float))
+    if world_T_base is not None:
+        vis[name].set_transform(np.asarray(world_T_base, float))
+
+
+def save_html(vis, path):
+    """Write the scene as one self-contained HTML file (atomic write)."""
+    return write_text(vis.static_html(), path)

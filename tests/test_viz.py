@@ -1,0 +1,42 @@
+import base64
+import re
+
+import numpy as np
+import pytest
+import trimesh
+
+from mavac.viz import meshcat_scene, plots
+
+
+def test_static_html_contains_scene_and_server_is_shut_down(tmp_path):
+    box = trimesh.creation.box((1.0, 0.5, 0.2))
+    with meshcat_scene.scene() as vis:
+        meshcat_scene.add_mesh(vis, "machine", box, opacity=0.5)
+        meshcat_scene.add_points(vis, "pts", np.random.default_rng(0).random((50, 3)))
+        meshcat_scene.add_lines(vis, "rays", np.zeros((3, 3)), np.eye(3))
+        meshcat_scene.add_triad(vis, "frame", np.eye(4))
+        path = meshcat_scene.save_html(vis, tmp_path / "scene.html")
+        proc = vis.window.server_proc
+    html = path.read_text()
+    assert html.lstrip().lower().startswith("<!doctype html") or "<html" in html[:200].lower()
+    blobs = [base64.b64decode(b) for b in re.findall(r"base64,([A-Za-z0-9+/=]+)", html)]
+    assert any(b"/meshcat/machine" in b for b in blobs), "mesh not embedded in the static HTML"
+    assert any(b"/meshcat/rays" in b for b in blobs)
+    assert proc.poll() is not None, "meshcat server still running after scene() exit"
+
+
+def test_server_shut_down_on_error():
+    with pytest.raises(RuntimeError):
+        with meshcat_scene.scene() as vis:
+            proc = vis.window.server_proc
+            raise RuntimeError("boom")
+    assert proc.poll() is not None
+
+
+def test_plot_mesh_and_save(tmp_path, monkeypatch):
+    monkeypatch.setenv("MAVAC_FAST", "1")
+    monkeypatch.setattr(plots, "figures_dir", lambda: tmp_path)
+    fig, ax = plots.new_figure(projection="3d")
+    plots.plot_mesh(ax, trimesh.creation.icosphere(subdivisions=2))
+    path = plots.save(fig, "sphere.png")
+    assert path.exists() and path.stat().st_size > 1000
