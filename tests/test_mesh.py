@@ -1,0 +1,151 @@
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+from mavac.geometry.mesh import load_mesh, repair_mesh
+
+
+def _write_box(path, size):
+    trimesh.creation.box([size, size / 2, size / 4]).export(path)
+    return path
+
+
+def _load_quietly(path, units="m"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a clean closed mesh loads without any warning
+        return load_mesh(path, units=units)
+
+
+@pytest.mark.parametrize("units, size_in_file", [("m", 1.2), ("cm", 120.0), ("mm", 1200.0),
+                                                 ("in", 1.2 / 0.0254)])
+def test_units_are_converted_to_metres(tmp_path, units, size_in_file):
+    mesh = _load_quietly(_write_box(tmp_path / "box.stl", size_in_file), units)
+    np.testing.assert_allclose(mesh.extents, [1.2, 0.6, 0.3], rtol=1e-6)
+    assert mesh.metadata["mavac_units"] == units
+    assert mesh.metadata["mavac_repairs"]["watertight"]
+    assert mesh.volume > 0
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply", ".dae"])
+def test_round_trip_through_each_format(tmp_path, suffix):
+    original = trimesh.creation.icosphere(subdivisions=2, radius=0.3)
+    original.export(tmp_path / f"sphere{suffix}")
+    mesh = _load_quietly(tmp_path / f"sphere{suffix}")
+    assert len(mesh.faces) == len(original.faces)
+    assert mesh.volume == pytest.approx(original.volume, rel=1e-5)
+
+
+def test_refuses_unknown_units(tmp_path):
+    with pytest.raises(ValueError, match="units must be one of"):
+        load_mesh(_write_box(tmp_path / "box.stl", 1.0), units="ft")
+
+
+def test_refuses_missing_file_and_unknown_type(tmp_path):
+    with pytest.raises(ValueError, match="path .* does not exist"):
+        load_mesh(tmp_path / "missing.stl")
+    (tmp_path / "mesh.step").write_text("ISO-10303-21;")
+    with pytest.raises(ValueError, match="unsupported file type '.step'"):
+        load_mesh(tmp_path / "mesh.step")
+
+
+def test_refuses_empty_mesh(tmp_path):
+    (tmp_path / "empty.obj").write_text("# no geometry\n")
+    with pytest.raises(ValueError, match="empty"):
+        load_mesh(tmp_path / "empty.obj")
+
+
+def test_refuses_nan_and_infinite_vertices(tmp_path):
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 inf 1\nf 1 2 3\nf 1 2 4\n")
+    with pytest.raises(ValueError, match="2 vertices with NaN or infinite"):
+        load_mesh(tmp_path / "nan.obj")
+
+
+def test_refuses_a_millimetre_file_read_as_metres(tmp_path):
+    path = _write_box(tmp_path / "machine.stl", 1500.0)
+    with pytest.raises(ValueError, match=r"1718 m across after reading it in 'm'; "
+                                         r"if the file is in millimetres pass units='mm'"):
+        load_mesh(path, units="m")
+
+
+def test_refuses_a_metre_file_read_as_millimetres(tmp_path):
+    path = _write_box(tmp_path / "part.stl", 0.5)
+    with pytest.raises(ValueError, match=r"across after reading it in 'mm'; .*units='m'"):
+        load_mesh(path, units="mm")
+
+
+def test_refuses_a_size_no_unit_can_explain(tmp_path):
+    path = _write_box(tmp_path / "planet.stl", 1e9)
+    with pytest.raises(ValueError, match="expected between 1 mm and 100 m"):
+        load_mesh(path, units="mm")
+
+
+def test_repairs_are_reported_in_warnings_and_metadata(tmp_path):
+    # faces: a good triangle, its duplicate, and a zero-area (collinear) one
+    (tmp_path / "bad.obj").write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 3\nf 1 2 4\n")
+    with pytest.warns(UserWarning) as record:
+        mesh = load_mesh(tmp_path / "bad.obj")
+    messages = " | ".join(str(w.message) for w in record)
+    assert "1 degenerate faces" in messages and "1 duplicate faces" in messages
+    repairs = mesh.metadata["mavac_repairs"]
+    assert repairs["degenerate_faces"] == 1 and repairs["duplicate_faces"] == 1
+    assert repairs["unreferenced_vertices"] == 1  # the collinear triangle's far corner
+    assert len(mesh.faces) == 1 and len(mesh.vertices) == 3
+
+
+def test_refuses_a_mesh_with_only_degenerate_faces(tmp_path):
+    (tmp_path / "flat.obj").write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")
+    with pytest.raises(ValueError, match="only degenerate faces"):
+        load_mesh(tmp_path / "flat.obj")
+
+
+def test_open_mesh_is_accepted_with_a_warning(tmp_path):
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:-2])  # one side removed
+    open_box.export(tmp_path / "open.ply")
+    with pytest.warns(UserWarning, match="not watertight"):
+        mesh = load_mesh(tmp_path / "open.ply")
+    assert not mesh.metadata["mavac_repairs"]["watertight"]
+    assert len(mesh.faces) == 10
+
+
+def test_inside_out_closed_mesh_is_flipped(tmp_path):
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    trimesh.Trimesh(box.vertices, box.faces[:, ::-1]).export(tmp_path / "inverted.stl")
+    with pytest.warns(UserWarning, match="inside out"):
+        mesh = load_mesh(tmp_path / "inverted.stl")
+    assert mesh.volume == pytest.approx(1.0)
+    assert mesh.metadata["mavac_repairs"]["inverted"]
+
+
+def test_stl_triangle_soup_is_merged_without_warning(tmp_path):
+    mesh = _load_quietly(_write_box(tmp_path / "soup.stl", 1.0))
+    assert mesh.metadata["mavac_repairs"]["merged_vertices"] > 0  # STL stores 3 per face
+    assert len(mesh.vertices) == 8
+
+
+def test_repair_mesh_counts_on_a_clean_mesh_are_zero():
+    counts = repair_mesh(trimesh.creation.icosphere())
+    assert counts == {"degenerate_faces": 0, "duplicate_faces": 0, "merged_vertices": 0,
+                      "unreferenced_vertices": 0, "rewound_faces": 0, "inverted": False}
+
+
+def test_inconsistent_winding_is_rewound_and_reported(tmp_path):
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    faces = box.faces.copy()
+    faces[-1] = faces[-1, ::-1]  # one face wound against its neighbours
+    trimesh.Trimesh(box.vertices, faces, process=False).export(tmp_path / "patchy.obj")
+    with pytest.warns(UserWarning, match=r"\b1 rewound faces"):
+        mesh = load_mesh(tmp_path / "patchy.obj")
+    assert mesh.is_winding_consistent and mesh.volume == pytest.approx(1.0)
+    assert not mesh.metadata["mavac_repairs"]["inverted"]
+
+
+@pytest.mark.parametrize("name, text", [("broken.ply", "not a ply\n"), ("broken.dae", "<x/>")])
+def test_refuses_unreadable_file(tmp_path, name, text):
+    (tmp_path / name).write_text(text)
+    with pytest.raises(ValueError, match="could not be read as a mesh"):
+        load_mesh(tmp_path / name)
+
