@@ -40,3 +40,17 @@ def test_plot_mesh_and_save(tmp_path, monkeypatch):
     plots.plot_mesh(ax, trimesh.creation.icosphere(subdivisions=2))
     path = plots.save(fig, "sphere.png")
     assert path.exists() and path.stat().st_size > 1000
+
+
+def test_robot_scene_embeds_links(tmp_path):
+    from mavac.robots.models import se2_to_matrix, ur10_mobile
+
+    robot = ur10_mobile()
+    with meshcat_scene.scene() as vis:
+        meshcat_scene.add_robot(vis, "robot", robot, robot.q_home, world_T_base=se2_to_matrix(1.0, 0.0, 0.5))
+        html = meshcat_scene.save_html(vis, tmp_path / "r.html").read_text()
+    blobs = [base64.b64decode(b) for b in re.findall(r"base64,([A-Za-z0-9+/=]+)", html)]
+    assert any(b"mir200_base" in b for b in blobs) and any(b"tool_sphere" in b for b in blobs)
+    with pytest.raises(ValueError, match="geometry"):
+        with meshcat_scene.scene() as vis:
+            meshcat_scene.add_robot(vis, "robot", robot, robot.q_home, geometry="wire")

@@ -88,19 +88,21 @@ def add_triad(vis, name: str, world_T_frame, length: float = 0.1) -> None:
     vis[name].set_transform(np.asarray(world_T_frame, float))
 
 
-def add_robot(vis, name: str, robot, q, world_T_base=None, collision: bool = False) -> None:
+def add_robot(vis, name: str, robot, q, world_T_base=None, geometry: str = "collision") -> None:
     """Add a :class:`mavac.robots.models.RobotModel` at configuration ``q`` (nq,).
 
-    Uses pinocchio's MeshcatVisualizer on the visual (or collision) geometry.
+    ``geometry="collision"`` (default) shows the collision model, which includes the mobile
+    base box, vacuum tool and camera and keeps exported HTML small (about 2 MB for the UR10
+    against 13 MB with the visual meshes); ``"visual"`` shows the visual meshes.
     """
     from pinocchio.visualize import MeshcatVisualizer
 
-    viz = MeshcatVisualizer(robot.model, robot.collision_model, robot.visual_model)
+    if geometry not in ("collision", "visual"):
+        raise ValueError(f"geometry must be 'collision' or 'visual', got {geometry!r}")
+    shown = robot.collision_model if geometry == "collision" else robot.visual_model
+    viz = MeshcatVisualizer(robot.model, shown, shown)
     viz.initViewer(viewer=vis)
     viz.loadViewerModel(rootNodeName=name)
-    if collision:
-        viz.displayCollisions(True)
-        viz.displayVisuals(False)
     viz.display(np.asarray(q, float))
     if world_T_base is not None:
         vis[name].set_transform(np.asarray(world_T_base, float))

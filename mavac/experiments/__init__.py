@@ -1,0 +1,1 @@
+"""One function per paper table or figure, each returning a pandas DataFrame for a notebook."""

@@ -1,0 +1,688 @@
+"""Parameters as frozen dataclasses. Defaults are the papers' values; each field cites
+where it comes from. Change them with ``dataclasses.replace``; every dataclass validates
+itself in ``__post_init__`` and raises ``ValueError`` naming the field and its range.
+
+Sections (one per paper stage) are appended by the module owners below; keep each
+dataclass next to the others of its paper.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .validate import check_int, check_nonnegative, check_positive, check_range, check_unit
+
+
+
+# ---- camera (owner: mavac.vision.camera) ----
+
+
+@dataclass(frozen=True)
+class CameraParams:
+    """Emulated camera of MAVAC ("Camera field of view (FOV)"): a rectangular pyramid along the
+    camera x axis with half-angles ``theta_a`` (camera XY plane) and ``theta_b`` (XZ plane),
+    cut at the reliable detection limit ``L_d`` (metres along x), followed by hidden point
+    removal (Katz et al. 2007) with spherical-flipping radius
+    ``hpr_radius_factor * max_i |s_i - viewpoint|``.
+    """
+
+    # The paper's camera is an Azure Kinect (MAVAC, Fig. 5) but it gives no angles. Azure
+    # Kinect DK hardware spec: colour 16:9 = 90 x 59 deg, depth NFOV unbinned = 75 x 65 deg.
+    # Dust is found in colour and located with depth, so the usable pyramid is their overlap,
+    # 75 x 59 deg: theta_a = 75/2 deg (image width, camera y).
+    theta_a: float = math.radians(37.5)
+    # Overlap height 59 deg (colour limits it, depth has 65): theta_b = 59/2 deg (camera z).
+    theta_b: float = math.radians(29.5)
+    # MAVAC gives no number for the "reliable detection limit". 0.5 m: the colour camera
+    # (1280 px over 90 deg) samples ~0.8 mm/px there, so a ~1 cm dust heap spans >10 px for
+    # the HSV filter, and it is the NFOV depth minimum range (spec 0.5-3.86 m), so the guard
+    # target (placed L_d along the normal) still gets depth.
+    L_d: float = 0.5
+    # HPR radius = factor x farthest point distance; 100 follows Open3D's HPR tutorial
+    # (radius = diameter * 100). Katz et al. need R > max distance, hence factor > 1.
+    hpr_radius_factor: float = 100.0
+
+    def __post_init__(self):
+        check_range("theta_a", self.theta_a, 0.0, math.pi / 2, lo_open=True, hi_open=True)
+        check_range("theta_b", self.theta_b, 0.0, math.pi / 2, lo_open=True, hi_open=True)
+        check_positive("L_d", self.L_d)
+        check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
+
+
+# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (owner: mavac/setups/lissajous.py, mavac/sim/scrub.py, mavac/setups/gpr.py) ----
+
+# Order of the operation-parameter vector x used by the scrub model and the GPR learner
+# (Kabir, Sec. VIII: tool speed, normal force, stiffness, frequency, amplitude).
+OPERATION_PARAMS = ("v", "f_n", "kappa", "f_x", "A_x")
+
+
+@dataclass(frozen=True)
+class LissajousParams:
+    """Lissajous force oscillation overlaid on the nominal tool path (Kabir, Sec. VIII).
+
+    Force in the tool XY plane: ``F_x = A_x sin(2 pi f_x t + phase)``,
+    ``F_y = A_y sin(2 pi f_y_ratio f_x t)``; the impedance controller turns it into a
+    displacement ``F / kappa``. The cleaning force ``f_n`` pushes along tool z.
+    ``v`` is the paper's relative speed (fraction of the maximum joint velocity, v_max = 1);
+    ours maps it to a tool speed ``v * tool_speed_at_vmax`` in m/s along the path.
+    """
+
+    # Kabir, Fig. 3 example: f_x = 6 Hz.
+    f_x: float = 6.0
+    # Kabir, Fig. 3: kappa_x = kappa_y = 5000 N/m.
+    kappa_x: float = 5000.0
+    kappa_y: float = 5000.0
+    # Kabir, Fig. 3: A_x = A_y = 30 N (Sec. VIII: A_y = A_x).
+    A_x: float = 30.0
+    A_y: float = 30.0
+    # Kabir, Fig. 3: v = 0.3 (fraction of the maximum joint velocity v_max = 1).
+    v: float = 0.3
+    # Kabir, Fig. 3: f_n = 10 N along tool z.
+    f_n: float = 10.0
+    # Kabir, Sec. VIII: f_y = 0.4 f_x.
+    f_y_ratio: float = 0.4
+    # Kabir, Sec. VIII: phase offset between x and y is pi/2.
+    phase: float = math.pi / 2
+    # Ours (the paper gives no mapping): tool speed at v = 1. 0.1 m/s is a cautious contact
+    # speed for a 7-DOF arm scrubbing with a sponge, so the paper's v = 0.3 -> 3 cm/s.
+    tool_speed_at_vmax: float = 0.1
+
+    def __post_init__(self):
+        check_positive("f_x", self.f_x)
+        check_positive("kappa_x", self.kappa_x)
+        check_positive("kappa_y", self.kappa_y)
+        check_nonnegative("A_x", self.A_x)
+        check_nonnegative("A_y", self.A_y)
+        check_range("v", self.v, 0.0, 1.0, lo_open=True)
+        check_nonnegative("f_n", self.f_n)
+        check_positive("f_y_ratio", self.f_y_ratio)
+        check_range("phase", self.phase, -2 * math.pi, 2 * math.pi)
+        check_positive("tool_speed_at_vmax", self.tool_speed_at_vmax)
+
+    @property
+    def f_y(self) -> float:
+        """Oscillation frequency along tool y, Hz."""
+        return self.f_y_ratio * self.f_x
+
+    @property
+    def tool_speed(self) -> float:
+        """Nominal tool speed along the path, m/s (``v * tool_speed_at_vmax``)."""
+        return self.v * self.tool_speed_at_vmax
+
+
+@dataclass(frozen=True)
+class ScrubModel:
+    """Constants of the SIMULATED scrubbing black box (``mavac.sim.scrub``), which stands in
+    for Kabir's physical cleaning experiments (Sec. IX-C). None of them is in the paper:
+    they are round, physically plausible values for a sponge tool on a 7-DOF arm in
+    Cartesian impedance mode, chosen so that C_p depends on all five operation parameters.
+    """
+
+    # Preston coefficient: stain layers removed per (Pa x m of sliding). Ours, set so that
+    # the paper's Fig. 3 parameters remove about a quarter of a layer at unit hardness.
+    preston: float = 1.0e-4
+    # Contact patch of the sponge: 20 mm x 20 mm (ours).
+    contact_width: float = 0.02
+    contact_area: float = 4.0e-4
+    # Foam compression: the contact area grows as contact_area (1 + f_n / foam_force), so
+    # pressure saturates at foam_force / contact_area (ours, 20 N for a kitchen sponge).
+    foam_force: float = 20.0
+    # Coulomb friction sponge/part: the tool only slides when the oscillating force exceeds
+    # mu * f_n (ours, wet sponge on plastic).
+    friction: float = 0.4
+    # Apparent mass and damping ratio of tool + arm along the oscillation (ours); with
+    # kappa = 5000 N/m the resonance is sqrt(kappa/m)/(2 pi) = 6.5 Hz.
+    mass: float = 3.0
+    damping_ratio: float = 0.3
+    # The impedance controller's Cartesian path-deviation limit softly caps the oscillation
+    # amplitude (ours, 10 mm).
+    max_deviation: float = 0.01
+    # Tipping/chatter: contact fraction 1 / (1 + (A / (ratio f_n))^exponent) (ours).
+    tipping_ratio: float = 4.0
+    tipping_exponent: float = 4.0
+    # Process noise: per-face and per-experiment log-normal factors on the removal (ours).
+    face_noise: float = 0.10
+    batch_noise: float = 0.05
+    # Stain hardness per face: log-normal spread (ours; layers of acrylic paint or mud dry
+    # unevenly).
+    hardness_sigma: float = 0.3
+    # Beer-Lambert optical depth, in stain layers: a face of thickness t shows the stain
+    # colour with opacity (1 - exp(-t / depth)) / (1 - exp(-1 / depth)) (ours; a thin film
+    # of paint is already dark).
+    optical_depth: float = 0.05
+
+    def __post_init__(self):
+        for name in ("preston", "contact_width", "contact_area", "foam_force", "friction", "mass",
+                     "damping_ratio", "max_deviation", "tipping_ratio", "tipping_exponent"):
+            check_positive(name, getattr(self, name))
+        check_nonnegative("face_noise", self.face_noise)
+        check_nonnegative("batch_noise", self.batch_noise)
+        check_nonnegative("hardness_sigma", self.hardness_sigma)
+        check_positive("optical_depth", self.optical_depth)
+
+
+@dataclass(frozen=True)
+class GPRParams:
+    """GPR-based operation-parameter learning (Kabir, Sec. VIII; adapted from their ref. [12]).
+
+    Bounds are ``(lower, upper)`` per operation parameter. The paper selects them "based on
+    the safety considerations and the robot capabilities" but gives no numbers: ours bracket
+    the paper's chosen values (Sec. IX-C) by a factor of about 2-5 each way.
+    """
+
+    # Ours: v bounds (fraction of v_max), around the paper's 0.1 (hull) and 0.3 (bowl).
+    v_bounds: tuple = (0.05, 0.6)
+    # Ours: normal force bounds, N, around the paper's 10 N and 20 N.
+    f_n_bounds: tuple = (2.0, 40.0)
+    # Ours: stiffness bounds, N/m, around the paper's 5000 N/m.
+    kappa_bounds: tuple = (1000.0, 10000.0)
+    # Ours: oscillation frequency bounds, Hz, around the paper's 6-7 Hz.
+    f_x_bounds: tuple = (1.0, 12.0)
+    # Ours: oscillation amplitude bounds, N, around the paper's 30-35 N.
+    A_x_bounds: tuple = (5.0, 60.0)
+    # Kabir, Sec. IX-C: C_p^th = 0.60 for the bowl (0.90 for the hull).
+    Cp_th: float = 0.60
+    # Kabir, Sec. IX-C: P_th = 0.10 for the bowl (0.30 for the hull).
+    P_th: float = 0.10
+    # Coarse uniform exploration (Sec. VIII): grid points per axis (2 -> 2^5 = 32 corners
+    # plus the centre). Ours.
+    grid_points: int = 2
+    # Experiment budget (exploration included); the run stops there, feasible or not. Ours.
+    max_experiments: int = 80
+    # Candidate points per iteration (seeded Sobol, plus local ones around the incumbent). Ours.
+    n_candidates: int = 2048
+    # Objective weight on speed; 1 - speed_weight goes to (low) force. Ours (equal weights).
+    speed_weight: float = 0.5
+    # Candidates within select_tol of the best objective count as ties, broken by the
+    # feasibility probability (the objective ignores kappa, f_x, A_x). Ours.
+    select_tol: float = 0.02
+    # Convergence: stop when the best feasible objective improved by less than ``tol`` over
+    # ``patience`` exploitation experiments, or the same point is chosen twice. Ours.
+    tol: float = 0.005
+    patience: int = 8
+    seed: int = 0
+
+    def __post_init__(self):
+        for name in OPERATION_PARAMS:
+            bounds = getattr(self, f"{name}_bounds")
+            if len(bounds) != 2:
+                raise ValueError(f"{name}_bounds must be a (lower, upper) pair, got {bounds!r}")
+            lo, hi = (check_range(f"{name}_bounds", b) for b in bounds)
+            if lo >= hi:
+                raise ValueError(f"{name}_bounds: lower bound {lo} must be < upper bound {hi}")
+        for name in ("v", "f_n", "kappa", "f_x"):
+            check_positive(f"{name}_bounds", getattr(self, f"{name}_bounds")[0])
+        check_range("v_bounds", self.v_bounds[1], 0.0, 1.0)
+        check_nonnegative("A_x_bounds", self.A_x_bounds[0])
+        check_unit("Cp_th", self.Cp_th)
+        check_range("P_th", self.P_th, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_int("grid_points", self.grid_points, 2, 5)
+        check_int("max_experiments", self.max_experiments, 1)
+        check_int("n_candidates", self.n_candidates, 16)
+        check_unit("speed_weight", self.speed_weight)
+        check_nonnegative("select_tol", self.select_tol)
+        check_nonnegative("tol", self.tol)
+        check_int("patience", self.patience, 1)
+        check_int("seed", self.seed, 0)
+
+    @property
+    def lower(self):
+        """Lower bounds in ``OPERATION_PARAMS`` order."""
+        return tuple(float(getattr(self, f"{n}_bounds")[0]) for n in OPERATION_PARAMS)
+
+    @property
+    def upper(self):
+        """Upper bounds in ``OPERATION_PARAMS`` order."""
+        return tuple(float(getattr(self, f"{n}_bounds")[1]) for n in OPERATION_PARAMS)
+
+
+# ---- Kabir: setup space, reach test, candidate sampling (owner: mavac/setups/reach.py, mavac/setups/sampling.py) ----
+
+
+@dataclass(frozen=True)
+class SetupSpaceParams:
+    """The part's setup space (x, y, alpha) and where it sits relative to the Puma 560 base.
+
+    A setup (x, y, alpha) places the part frame (origin at the centre of the part's bounding-box
+    bottom, z up) at ``base_T_part = Trans(origin_x + x, origin_y + y, table_z) Rz(alpha)`` in the
+    robot base frame (the Puma's shoulder: z0 up through joint 1, the shoulder axis at z = 0).
+    The paper gives the range, not the placement (Kabir, Sec. IX-A); see ``origin_x`` below.
+    """
+
+    # Kabir, Sec. IX-A: "The narrowed down sampling region ... was [0, 1 m] x [0, 1 m] x [0, 2 pi]".
+    x_min: float = 0.0
+    x_max: float = 1.0
+    y_min: float = 0.0
+    y_max: float = 1.0
+    alpha_min: float = 0.0
+    alpha_max: float = 2.0 * math.pi
+    # Kabir, Sec. IX-A1: "50 mm x 50 mm x 10 deg ... 16317 setup configurations" (21 x 21 x 37).
+    res_x: float = 0.05
+    res_y: float = 0.05
+    res_alpha: float = math.radians(10.0)
+    # Ours (the paper does not place the square): x runs away from the robot from 0.30 m in
+    # front of joint 1 and y is centred on the robot, so the part centre moves over
+    # [0.30, 1.30] x [-0.50, 0.50] m in the base frame. The Puma 560 reaches ~0.86 m from the
+    # shoulder (a2 + d4 = 0.864 m plus a3, d3 offsets): with the centre near the robot a part of
+    # up to ~1.2 m is reachable over most of its top, with the centre at the far corner only its
+    # near edge is, so every object needs several setups and the far part of the square none.
+    origin_x: float = 0.30
+    origin_y: float = -0.50
+    # Ours: table top at the height of the shoulder axis, 0.672 m above the floor under the
+    # Puma's pedestal (a common workbench height). The objects (up to 0.53 m tall, Kabir Fig. 6)
+    # rise above the shoulder, so the elbow-up arm reaches over them and the far and downward-
+    # facing parts of a stain need other setups. Lower tables (tried: 0.12 m and 0.37 m above
+    # the floor) let one setup reach most of every stain, unlike the paper's Table II.
+    table_z: float = 0.0
+
+    def __post_init__(self):
+        for name in ("x_min", "x_max", "y_min", "y_max", "alpha_min", "alpha_max",
+                     "origin_x", "origin_y", "table_z"):
+            check_range(name, getattr(self, name))
+        if self.x_min > self.x_max:
+            raise ValueError(f"x_min must be <= x_max, got {self.x_min} > {self.x_max}")
+        if self.y_min > self.y_max:
+            raise ValueError(f"y_min must be <= y_max, got {self.y_min} > {self.y_max}")
+        check_range("alpha_max", self.alpha_max, self.alpha_min, self.alpha_min + 2.0 * math.pi)
+        check_positive("res_x", self.res_x)
+        check_positive("res_y", self.res_y)
+        check_positive("res_alpha", self.res_alpha)
+
+
+@dataclass(frozen=True)
+class ReachParams:
+    """Reach test of a stain patch (Kabir, Sec. IV): all three vertices need an IK solution
+    within joint limits with the tool axis along the patch normal, into the surface."""
+
+    # Ours: the paper's Puma carries a cleaning tool of unstated length; 0.10 m from the flange
+    # to the tool tip (a short scrubbing tool) makes the wrist centre sit back from the surface,
+    # so the orientation constraint matters as it does for the paper's tool.
+    tool_length: float = 0.10
+    # Kabir, Sec. IV: only IK is tested; arm-vs-part collision is an option (ours, off).
+    check_collision: bool = False
+    # Clearance used by the optional collision check, m (ours).
+    collision_margin: float = 0.0
+    # The collision check poses the tool this far above the patch along its normal, since at
+    # the patch itself the tool tip touches the part by construction (ours, 10 mm).
+    collision_standoff: float = 0.01
+    # Vertex targets per IK batch (memory bound; ~100 MB of float64 at 1e6). Ours.
+    batch_size: int = 1_000_000
+
+    def __post_init__(self):
+        check_nonnegative("tool_length", self.tool_length)
+        check_nonnegative("collision_margin", self.collision_margin)
+        check_nonnegative("collision_standoff", self.collision_standoff)
+        check_int("batch_size", self.batch_size, lo=1)
+
+
+@dataclass(frozen=True)
+class SamplingParams:
+    """Hierarchical / random sampling with gradient descent (Kabir, Sec. IV-A, IX-A2)."""
+
+    # Level 1 of hierarchical sampling. Kabir, Table III: level 1 costs n_rfc = 36 without
+    # gradient descent, and Table V: "36 candidate setups ... uniformly sampled"; ours: 36 =
+    # 3 x 3 x 4 = 500 mm x 500 mm x 120 deg with both ends of each range included.
+    coarse_res_x: float = 0.5
+    coarse_res_y: float = 0.5
+    coarse_res_alpha: float = math.radians(120.0)
+    # Ours: at most 6 levels (two halvings of every axis, 250 x 250 x 60 deg) before giving up.
+    max_levels: int = 6
+    # Gradient-descent step: the fine resolution of Kabir Sec. IX-A1 (50 mm, 50 mm, 10 deg),
+    # the paper's Fig. 8 landscapes are sampled at 50 mm too. Ours (no step is given).
+    gd_step_x: float = 0.05
+    gd_step_y: float = 0.05
+    gd_step_alpha: float = math.radians(10.0)
+    # Ours: random seeds drawn without replacement from the fine uniform grid, so the runs end
+    # and reuse the baseline reach results; False draws from the continuous box.
+    random_on_grid: bool = True
+    # Seeds drawn at most when random_on_grid is False (ours).
+    max_random_samples: int = 20_000
+    # Kabir, Sec. IX-A2: "repeating the experiment 100 times for each test case".
+    repetitions: int = 100
+
+    def __post_init__(self):
+        for name in ("coarse_res_x", "coarse_res_y", "coarse_res_alpha",
+                     "gd_step_x", "gd_step_y", "gd_step_alpha"):
+            check_positive(name, getattr(self, name))
+        check_int("max_levels", self.max_levels, lo=1)
+        check_int("max_random_samples", self.max_random_samples, lo=1)
+        check_int("repetitions", self.repetitions, lo=1)
+
+
+# ---- Kabir: tool paths and ICP (owner: mavac/setups/toolpath.py, mavac/vision/icp.py) ----
+
+
+@dataclass(frozen=True)
+class ToolpathParams:
+    """Plane-slicing tool paths and their execution time t^e = t^c + t^r (Kabir, Sec. III, VI)."""
+
+    # Tool width = spacing of the cutting planes. Kabir, Sec. III: each patch has area
+    # a_i <= a_m, the tool-tip area; Sec. IX gives patches < 1.5 cm^2 (synthetic) and
+    # < 10 mm^2 (bowl, hull) but no tool size. Ours: a 30 mm sponge (a_m ~ 7 cm^2 >= both).
+    tool_width_m: float = 0.03
+    # Ours (Kabir, Sec. VI samples the section curves but gives no spacing): 10 mm, a third of
+    # the tool width, dense enough that IK failures and stain gaps split the path where they
+    # happen and that the spline follows the surface curvature of the test parts.
+    waypoint_spacing_m: float = 0.01
+    # Kabir, Sec. IX-C: v = 0.3 of the maximum joint velocity (bowl); mapped to m/s like
+    # LissajousParams.tool_speed (0.3 x 0.1 m/s at v = 1) -> 0.03 m/s in contact.
+    tool_speed_m_s: float = 0.03
+    # Ours (the paper gives none): lift 20 mm along the normal off the surface before a
+    # repositioning move, clear of a sponge's compression and of small surface bumps.
+    lift_height_m: float = 0.02
+    # Ours: repositioning is a free-space move, 0.1 m/s (tool_speed_at_vmax of LissajousParams,
+    # i.e. v = 1), faster than scrubbing.
+    reposition_speed_m_s: float = 0.1
+
+    def __post_init__(self):
+        check_positive("tool_width_m", self.tool_width_m)
+        check_positive("waypoint_spacing_m", self.waypoint_spacing_m)
+        check_positive("tool_speed_m_s", self.tool_speed_m_s)
+        check_positive("lift_height_m", self.lift_height_m)
+        check_positive("reposition_speed_m_s", self.reposition_speed_m_s)
+
+
+@dataclass(frozen=True)
+class ICPParams:
+    """Registration of the part's CAD mesh to an RGB-D point cloud (Kabir, Sec. VII: "We used
+    the iterative closest point (ICP) algorithm [25] to match the CAD model ... to its point
+    cloud"). The paper gives no ICP settings; all values below are ours."""
+
+    # Point-to-plane correspondences farther than this are ignored: 20 mm, ~10 % of the
+    # bowl/hull size (Kabir, Sec. IX-C), wide enough for a few-degree initial error.
+    max_correspondence_m: float = 0.02
+    # Open3D ICPConvergenceCriteria; 100 iterations is ample for point-to-plane.
+    max_iterations: int = 100
+    relative_fitness: float = 1e-7
+    relative_rmse: float = 1e-7
+    # Points sampled on the CAD mesh (with its exact face normals) as the ICP target.
+    model_points: int = 20_000
+    # A registration "succeeds" (basin of convergence) when both errors are below these:
+    # 5 mm (a sixth of the 30 mm tool width) and 2 deg.
+    success_translation_m: float = 0.005
+    success_rotation_rad: float = math.radians(2.0)
+
+    def __post_init__(self):
+        check_positive("max_correspondence_m", self.max_correspondence_m)
+        check_int("max_iterations", self.max_iterations, lo=1)
+        check_positive("relative_fitness", self.relative_fitness)
+        check_positive("relative_rmse", self.relative_rmse)
+        check_int("model_points", self.model_points, lo=3)
+        check_positive("success_translation_m", self.success_translation_m)
+        check_range("success_rotation_rad", self.success_rotation_rad, 0.0, math.pi, lo_open=True)
+
+
+# ---- Kabir: setup planner, DFBnB + IESS (owner: mavac/setups/setcover.py) ----
+
+
+@dataclass(frozen=True)
+class SetupPlannerParams:
+    """Depth-first branch-and-bound setup planner (Kabir, Sec. V, Algorithms 1-5).
+
+    Cost of a plan (eq. 1): ``T(S) = sum_j (t_s + t_e(tau_j))``, each candidate setup having
+    the fixed cost ``c_j = t_s + t_e_j``.
+    """
+
+    # Kabir, Sec. V-A: Algorithms 1-2 (2) or, Sec. V-B, Algorithms 3-4 with the IESS of
+    # Algorithm 5 (4). Table V and the physical tests (Sec. IX-C) use Algorithm 2.
+    algorithm: int = 2
+    # Kabir, eq. 2 T^lb = min over unused setups of c_j ("lb", exact) or eq. 7 T^b = max over
+    # unused setups ("b", faster, optimal only with some probability); Table VI.
+    bound: str = "lb"
+    # Kabir, Sec. IX-A4: branch-guiding heuristic (sort S_u by cleaning rate), ON in the paper.
+    guiding: bool = True
+    # Kabir, Sec. IX-A4: branch-pruning heuristic (future-cost bound), ON in the paper.
+    pruning: bool = True
+    # Kabir, Sec. V-A: computational time bound T_max, s. The paper gives no value; None
+    # searches to convergence (Tables V-VI report runs to convergence).
+    t_max: float | None = None
+    # Kabir, Sec. V-B2: T_decay in step 5 of Algorithm 4, s; "we set T_decay = 0".
+    t_decay: float = 0.0
+    # Kabir, Sec. V-B2: T_decay "can be an exponential function of the number of nodes
+    # expanded": T_decay(k) = t_decay * exp(t_decay_rate * k), 1/node. Ours: 0 (constant).
+    t_decay_rate: float = 0.0
+    # Kabir, Algorithm 5: N_repeat. None applies Sec. IX-B: the smallest N_repeat reaching
+    # probability iess_prob (eq. 5) for the worst q = ceil(m/2) (Fig. 9).
+    n_repeat: int | None = None
+    # Kabir, Sec. IX-B: "guarantees optimality with probability >= 0.90".
+    iess_prob: float = 0.9
+    # Kabir, Table VI: fixed setup time for all setups, 0, 60 or 3000 s; Table V's Hyperboloid
+    # and Sine node counts match the 60 s rows.
+    setup_time: float = 60.0
+    # Seed of Algorithm 5's random draws (ours).
+    seed: int = 0
+
+    def __post_init__(self):
+        check_int("algorithm", self.algorithm, 2, 4)
+        if self.algorithm not in (2, 4):
+            raise ValueError(f"algorithm must be 2 or 4, got {self.algorithm!r}")
+        if self.bound not in ("lb", "b"):
+            raise ValueError(f"bound must be 'lb' (eq. 2) or 'b' (eq. 7), got {self.bound!r}")
+        if not isinstance(self.guiding, bool):
+            raise ValueError(f"guiding must be a bool, got {self.guiding!r}")
+        if not isinstance(self.pruning, bool):
+            raise ValueError(f"pruning must be a bool, got {self.pruning!r}")
+        if self.t_max is not None:
+            check_positive("t_max", self.t_max)
+        check_nonnegative("t_decay", self.t_decay)
+        check_nonnegative("t_decay_rate", self.t_decay_rate)
+        if self.algorithm == 2 and self.t_decay > 0:
+            raise ValueError("t_decay only enters step 5 of Algorithm 4; set algorithm=4")
+        if self.n_repeat is not None:
+            check_int("n_repeat", self.n_repeat, 1)
+        check_range("iess_prob", self.iess_prob, 0.0, 1.0, lo_open=True, hi_open=True)
+        check_nonnegative("setup_time", self.setup_time)
+        check_int("seed", self.seed, 0)
+
+
+# ---- MAVAC offline planning: reachability map, spots, guards, NoS (owner: mavac/mobile) ----
+
+_VISIBILITY_METHODS = ("hpr", "raycast")
+
+
+def _check_positive_tuple(name: str, values) -> None:
+    if len(values) == 0:
+        raise ValueError(f"{name} must hold at least one value")
+    for v in values:
+        check_positive(name, v)
+
+
+@dataclass(frozen=True)
+class ReachabilityMapParams:
+    """Reachability map of the arm on its base: voxels x sampled viewing-axis directions; the
+    index of a voxel is the fraction of directions that are reachable (MAVAC, "Robot base
+    placement", after Paus et al. and Porges et al.'s capability maps)."""
+
+    # Issue 3: "a voxel grid of configurable resolution, e.g. 5 cm".
+    voxel_size: float = 0.05
+    # Ours: axis directions on a Fibonacci sphere; 50 are ~29 deg apart.
+    n_directions: int = 50
+    # Ours: forward-kinematics samples of the arm joints; each is rotated about joint 1's
+    # vertical axis ``n_rotations`` times (exact copies when joint 1 turns a full circle).
+    # 200k x 128 leaves < 10 % of the cells that batched IK reaches unmarked (UR10, 5 cm).
+    n_samples: int = 200_000
+    n_rotations: int = 128
+    seed: int = 0
+
+    def __post_init__(self):
+        check_positive("voxel_size", self.voxel_size)
+        check_int("n_directions", self.n_directions, lo=4)
+        check_int("n_samples", self.n_samples, lo=1)
+        check_int("n_rotations", self.n_rotations, lo=1)
+        check_int("seed", self.seed, 0)
+
+
+@dataclass(frozen=True)
+class SpotParams:
+    """Spot (mobile-base placement) selection (MAVAC, "Robot base placement")."""
+
+    # MAVAC, Results: "we suggest to set P_s = 0.02" (Table 1 sweeps 0.01-0.30).
+    P_s: float = 0.02
+    # Ours (the paper explores "different positions around the machine", after Paus et al.):
+    # candidate base centres on rings at these distances from the machine footprint, m.
+    # 0.45 m leaves 0.16 m between the 0.58 m-wide MiR200 (parked alongside) and the machine.
+    ring_distances: tuple = (0.45, 0.75)
+    # Ours: spacing of candidate poses along a ring, m.
+    ring_spacing: float = 0.25
+    # Ours: seeded jitter of the candidate poses (what varies between Table 1 trials besides
+    # the surface sampling): uniform +- jitter_xy (m) and +- jitter_theta (rad).
+    jitter_xy: float = 0.05
+    jitter_theta: float = 0.15
+    # Ours: the base is parked alongside the machine (long side tangent to the ring), turned
+    # by each of these offsets (rad).
+    heading_offsets: tuple = (0.0,)
+    # Ours: "visible from a spot" = visible from a viewpoint above the base at one of these
+    # heights (m), a stand-in for where the arm can hold the camera.
+    view_heights: tuple = (0.8, 1.6)
+    # MAVAC uses hidden point removal; "raycast" is exact visibility.
+    visibility: str = "hpr"
+
+    def __post_init__(self):
+        check_unit("P_s", self.P_s)
+        _check_positive_tuple("ring_distances", self.ring_distances)
+        check_positive("ring_spacing", self.ring_spacing)
+        check_nonnegative("jitter_xy", self.jitter_xy)
+        check_range("jitter_theta", self.jitter_theta, 0.0, math.pi)
+        if len(self.heading_offsets) == 0:
+            raise ValueError("heading_offsets must hold at least one angle")
+        for a in self.heading_offsets:
+            check_range("heading_offsets", a, -math.pi, math.pi)
+        _check_positive_tuple("view_heights", self.view_heights)
+        if self.visibility not in _VISIBILITY_METHODS:
+            raise ValueError(f"visibility must be one of {_VISIBILITY_METHODS}, got {self.visibility!r}")
+
+
+@dataclass(frozen=True)
+class GuardParams:
+    """Guard (arm inspection configuration) selection per spot (MAVAC, "Local exploration",
+    "Guard selection", eq. 3: score = I_m^k1 x (N / |S|)^k2)."""
+
+    # MAVAC, Results: "we suggest to set P_s = 0.02, P_g = 15" (per cent), i.e. 0.15.
+    P_g: float = 0.15
+    # MAVAC, Results: "they are fixed to k1 = k2 = 1, to give the same weight to both".
+    k1: float = 1.0
+    k2: float = 1.0
+    # Ours: one guard candidate per small cluster of surface elements of this size, m
+    # (the paper assigns "a guard point to each surface").
+    guard_spacing: float = 0.10
+    # MAVAC uses FOV + HPR; "raycast" replaces HPR with exact visibility.
+    visibility: str = "hpr"
+    # Point set HPR runs on: "surface" = all of S (Fig. 3 shows HPR points outside the
+    # pyramid, so the paper runs HPR on the whole cloud), "fov" = only the points in the FOV.
+    hpr_input: str = "surface"
+    # Ours: clearance to the machine for a guard configuration, m.
+    collision_margin: float = 0.01
+
+    def __post_init__(self):
+        check_unit("P_g", self.P_g)
+        check_unit("k1", self.k1)
+        check_unit("k2", self.k2)
+        check_positive("guard_spacing", self.guard_spacing)
+        if self.visibility not in _VISIBILITY_METHODS:
+            raise ValueError(f"visibility must be one of {_VISIBILITY_METHODS}, got {self.visibility!r}")
+        if self.hpr_input not in ("surface", "fov"):
+            raise ValueError(f"hpr_input must be 'surface' or 'fov', got {self.hpr_input!r}")
+        check_nonnegative("collision_margin", self.collision_margin)
+
+
+@dataclass(frozen=True)
+class NoSParams:
+    """Non-observed surfaces (MAVAC, "Non-observed surface (NoS)", Fig. 4): DBSCAN clusters,
+    outward ray fans, gateways, NoS guards checked with RRT-Connect."""
+
+    # Ours: DBSCAN radius, m (about two surface spacings) and minimum cluster size.
+    eps: float = 0.12
+    min_samples: int = 4
+    # Ours: rays per cluster (Fibonacci sphere) and the length a ray must travel free, m.
+    n_rays: int = 400
+    ray_length: float = 1.5
+    # Ours: ray origins are lifted this far off the surface, m.
+    origin_offset: float = 0.01
+    # Ours: the NoS camera is tried on up to this many rays of the best gateway, closest to its
+    # mean exit direction first (the paper uses the mean direction; one ray may be unreachable).
+    max_ray_tries: int = 8
+    # Ours: OMPL RRT-Connect time bound per NoS guard, s (MAVAC: RRT-Connect, Kuffner 2000).
+    rrt_time_limit: float = 2.0
+    # Ours: collision-check resolution of RRT-Connect (fraction of the space extent).
+    rrt_resolution: float = 0.01
+    enabled: bool = True
+
+    def __post_init__(self):
+        check_positive("eps", self.eps)
+        check_int("min_samples", self.min_samples, lo=1)
+        check_int("n_rays", self.n_rays, lo=4)
+        check_positive("ray_length", self.ray_length)
+        check_nonnegative("origin_offset", self.origin_offset)
+        check_int("max_ray_tries", self.max_ray_tries, lo=1)
+        check_positive("rrt_time_limit", self.rrt_time_limit)
+        check_range("rrt_resolution", self.rrt_resolution, 0.0, 1.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class InspectionParams:
+    """Everything ``mavac.mobile.plan.plan_inspection`` needs (MAVAC offline computation)."""
+
+    # Ours: surface discretisation S, m (MAVAC discretises the surface into a point cloud;
+    # dust heaps are 10 cm apart, S is twice as fine).
+    surface_spacing: float = 0.05
+    # Seed of the surface sampling, the spot jitter, IK restarts and RRT-Connect.
+    seed: int = 0
+    camera: CameraParams = CameraParams()
+    reach: ReachabilityMapParams = ReachabilityMapParams()
+    spot: SpotParams = SpotParams()
+    guard: GuardParams = GuardParams()
+    nos: NoSParams = NoSParams()
+
+    def __post_init__(self):
+        check_positive("surface_spacing", self.surface_spacing)
+        check_int("seed", self.seed, 0)
+        for name, cls in (("camera", CameraParams), ("reach", ReachabilityMapParams),
+                          ("spot", SpotParams), ("guard", GuardParams), ("nos", NoSParams)):
+            if not isinstance(getattr(self, name), cls):
+                raise ValueError(f"{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
+
+
+# ---- Kabir: plan_setups, the user-facing setup planner (owner: mavac/setups/plan.py) ----
+
+from dataclasses import field  # noqa: E402  (only this section needs it)
+
+
+@dataclass(frozen=True)
+class SetupPlanParams:
+    """Everything ``mavac.setups.plan.plan_setups`` needs: setup space, reach test, candidate
+    sampling, cost model and planner (Kabir, Sections III-V)."""
+
+    space: SetupSpaceParams = field(default_factory=SetupSpaceParams)
+    reach: ReachParams = field(default_factory=ReachParams)
+    sampling: SamplingParams = field(default_factory=SamplingParams)
+    # Kabir, Sec. IX-A2: "hierarchical uniform sampling with the CA_XY gradient descent variant
+    # guarantees optimal solution" -> the default candidate generator. "uniform" is the
+    # 16,317-setup baseline (IV-A1), "random" is IV-A3.
+    sampling_method: str = "hierarchical"
+    # Kabir, Table I / Sec. IX-A2: CA_XY worked best.
+    variant: str = "CA_XY"
+    # Seed of random sampling (ours).
+    seed: int = 0
+    # Kabir, eq. 1 with t_e from a simple model (ours): t_e = sum(area x passes) / rate, rate =
+    # 1e-3 m^2/s (a 20 mm wide tool sweeping 5 cm/s); the paper gives no rate for the Puma.
+    cleaning_rate: float = 1.0e-3
+    # Setup planner. Ours: Algorithm 2, bound eq. 2, both heuristics on (the paper's setting),
+    # with T_max = 10 s so the call always returns (the paper sets no T_max); setup time 60 s
+    # (Kabir, Table VI middle value).
+    planner: SetupPlannerParams = field(default_factory=lambda: SetupPlannerParams(t_max=10.0))
+    # "milp" (exact, HiGHS), "dfbnb" (the paper's search) or "both" (DFBnB plan + MILP
+    # certificate and gap). Ours: "both".
+    method: str = "both"
+
+    def __post_init__(self):
+        if self.sampling_method not in ("uniform", "hierarchical", "random"):
+            raise ValueError(f"sampling_method must be 'uniform', 'hierarchical' or 'random', "
+                             f"got {self.sampling_method!r}")
+        variants = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_XYa")
+        if self.variant not in variants:
+            raise ValueError(f"variant must be one of {variants}, got {self.variant!r}")
+        check_int("seed", self.seed, lo=0)
+        check_positive("cleaning_rate", self.cleaning_rate)
+        if self.method not in ("milp", "dfbnb", "both"):
+            raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {self.method!r}")

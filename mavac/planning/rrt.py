@@ -1,0 +1,169 @@
+"""RRT-Connect (Kuffner and LaValle 2000) through OMPL 2.0.1's Python bindings.
+
+MAVAC ("Trajectory generation") plans the arm's approach motions with RRT-connect from the
+Open Motion Planning Library. This wrapper plans in a box of joint space
+``[lower, upper]`` with any Python validity function (e.g.
+``lambda q: not checker.in_collision(q)``), simplifies the path and interpolates it at the
+motion-checking resolution, so consecutive states are at most ``resolution x`` the box
+diagonal apart and every returned state has been declared valid.
+
+Determinism: OMPL gives every RNG instance a seed drawn from one process-wide seed
+generator. Each call re-seeds that generator (``ou.RNG.setSeed``) before allocating the
+space, planner and simplifier, and RRT-Connect stops at its first solution and the
+simplifier runs to convergence (``simplifyMax``, no time budget), so the same inputs and
+seed give the same path bit for bit -- unless the time limit cuts the search short, in which
+case there is no path to compare.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..validate import check_bounds, check_int, check_range
+
+
+@dataclass
+class PlanResult:
+    """Outcome of :func:`plan_rrt_connect`.
+
+    Attributes
+    ----------
+    path : (k, nq) float or None
+        Joint-space waypoints from ``q_start`` to ``q_goal`` (inclusive), None if unsolved.
+    solved : bool
+        True iff OMPL found an exact solution.
+    seconds : float
+        Wall time of the whole call (setup, solve, simplify, interpolate), s.
+    reason : str
+        ``"solved"``, ``"invalid start"``, ``"invalid goal"``, or OMPL's status otherwise
+        (e.g. ``"Timeout"``, ``"Approximate solution"``).
+    """
+
+    path: np.ndarray | None
+    solved: bool
+    seconds: float
+    reason: str = "solved"
+
+
+def _check_config(name: str, q, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    a = np.asarray(q, dtype=float)
+    if a.shape != lower.shape:
+        raise ValueError(f"{name} must have shape {lower.shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    outside = np.flatnonzero((a < lower) | (a > upper))
+    if outside.size:
+        raise ValueError(f"{name} is outside [lower, upper] at index {outside.tolist()}")
+    return a
+
+
+def plan_rrt_connect(
+    is_valid,
+    q_start,
+    q_goal,
+    lower,
+    upper,
+    time_limit: float = 1.0,
+    seed: int = 0,
+    resolution: float = 0.01,
+) -> PlanResult:
+    """Plan a valid joint-space path with OMPL's RRT-Connect.
+
+    Parameters
+    ----------
+    is_valid : callable
+        ``is_valid(q: (nq,) float ndarray) -> bool``. An exception raised inside it is
+        re-raised after OMPL returns (OMPL itself only sees "invalid").
+    q_start, q_goal : (nq,) float
+        Start and goal configurations, inside ``[lower, upper]``.
+    lower, upper : (nq,) float
+        Box of the configuration space (e.g. joint limits); ``lower < upper``.
+    time_limit : float, s
+        Planning time budget, > 0 (simplification is not counted in it).
+    seed : int, >= 0
+        Seed of OMPL's random generators for this call.
+    resolution : float
+        Motion-validation step as a fraction of the box diagonal, in (0, 1]
+        (OMPL's longest valid segment fraction); also the spacing of the returned path.
+
+    Returns
+    -------
+    PlanResult
+        ``path (k, nq)`` or None, ``solved``, ``seconds``, ``reason``.
+    """
+    t0 = time.perf_counter()
+    if not callable(is_valid):
+        raise ValueError("is_valid must be callable: is_valid(q) -> bool")
+    lo, hi = check_bounds("lower/upper", lower, upper)
+    if lo.ndim != 1 or lo.size == 0:
+        raise ValueError(f"lower and upper must be 1-D arrays with nq >= 1 entries, got shape {lo.shape}")
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise ValueError("lower and upper must be finite")
+    if np.any(lo == hi):
+        raise ValueError(f"lower/upper: empty interval at index {np.flatnonzero(lo == hi).tolist()}")
+    qs = _check_config("q_start", q_start, lo, hi)
+    qg = _check_config("q_goal", q_goal, lo, hi)
+    check_range("time_limit", time_limit, 0.0, np.inf, lo_open=True)
+    seed = check_int("seed", seed, 0, 2**31 - 2)
+    check_range("resolution", resolution, 0.0, 1.0, lo_open=True)
+
+    # Checked here so the reason is explicit (OMPL would only report "Invalid start").
+    if not is_valid(qs.copy()):
+        return PlanResult(None, False, time.perf_counter() - t0, "invalid start")
+    if not is_valid(qg.copy()):
+        return PlanResult(None, False, time.perf_counter() - t0, "invalid goal")
+
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    dim = lo.size
+    previous_level = ou.getLogLevel()
+    # Re-seeding after the first RNG exists is intended here; silence OMPL's error about it.
+    ou.setLogLevel(ou.LOG_NONE)
+    ou.RNG.setSeed(seed + 1)  # OMPL ignores seed 0
+    ou.setLogLevel(ou.LOG_WARN)
+    try:
+        space = ob.RealVectorStateSpace(0)
+        for a, b in zip(lo, hi):
+            space.addDimension(float(a), float(b))
+        space.setLongestValidSegmentFraction(float(resolution))
+        si = ob.SpaceInformation(space)
+
+        errors: list[BaseException] = []
+
+        def checker(state) -> bool:
+            if errors:
+                return False
+            try:
+                return bool(is_valid(np.array(state[0:dim])))
+            except Exception as exc:  # surfaced after solve(); OMPL cannot carry it
+                errors.append(exc)
+                return False
+
+        si.setStateValidityChecker(checker)
+        si.setup()
+        ss = og.SimpleSetup(si)
+        ss.setPlanner(og.RRTConnect(si))
+        start, goal = space.allocState(), space.allocState()
+        for i in range(dim):
+            start[i] = float(qs[i])
+            goal[i] = float(qg[i])
+        ss.setStartAndGoalStates(start, goal)
+        status = ss.solve(float(time_limit))
+        if errors:
+            raise errors.pop()  # pop: no cycle exception -> traceback -> checker -> errors
+        if not ss.haveExactSolutionPath():
+            return PlanResult(None, False, time.perf_counter() - t0, status.asString())
+        ss.simplifySolution()  # duration 0 -> simplifyMax: deterministic, no time budget
+        if errors:
+            raise errors.pop()
+        path = ss.getSolutionPath()
+        path.interpolate()  # at the longest-valid-segment resolution
+        q = np.array([s[0:dim] for s in path.getStates()], dtype=float)
+    finally:
+        ou.setLogLevel(previous_level)
+    return PlanResult(q, True, time.perf_counter() - t0, "solved")

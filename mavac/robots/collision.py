@@ -1,0 +1,146 @@
+"""Self- and obstacle-collision checking with pinocchio + coal.
+
+The obstacle (a machine or a part, a trimesh in the world frame) becomes a coal BVH
+(``BVHModelOBBRSS``) attached to the robot's base (universe) joint at ``base_T_world``;
+moving the base only moves that placement. Self-collision pairs are all pairs of robot
+geometries except those on the same joint or on kinematically adjacent joints (parent/child),
+which touch by construction.
+"""
+
+from __future__ import annotations
+
+import coal
+import numpy as np
+import pinocchio as pin
+import trimesh
+
+from ..validate import check_nonnegative
+from .kinematics import _check_q
+
+_OBSTACLE = "obstacle"
+_FLOOR = "floor"
+# Floor slab: wide enough for any cell, thick enough that nothing tunnels through it.
+_FLOOR_SIZE = (100.0, 100.0, 1.0)
+
+
+def _check_pose(name: str, T) -> np.ndarray:
+    a = np.asarray(T, dtype=float)
+    if a.shape != (4, 4):
+        raise ValueError(f"{name} must have shape (4, 4), got {np.shape(T)}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    R = a[:3, :3]
+    if np.max(np.abs(R @ R.T - np.eye(3))) > 1e-6 or np.linalg.det(R) < 0 or not np.allclose(a[3], [0, 0, 0, 1]):
+        raise ValueError(f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
+    return a
+
+
+def bvh_from_mesh(mesh: trimesh.Trimesh) -> coal.BVHModelOBBRSS:
+    """A coal bounding-volume hierarchy of a triangle mesh (vertices in metres)."""
+    bvh = coal.BVHModelOBBRSS()
+    bvh.beginModel(len(mesh.faces), len(mesh.vertices))
+    bvh.addVertices(np.asarray(mesh.vertices, dtype=float))
+    bvh.addTriangles(np.asarray(mesh.faces, dtype=np.int64))
+    bvh.endModel()
+    return bvh
+
+
+class CollisionChecker:
+    """Batched collision test of robot configurations (self-collision + one obstacle mesh).
+
+    Parameters
+    ----------
+    robot : RobotModel
+    obstacle : trimesh.Trimesh or None
+        Obstacle in the world frame (metres). Only its surface is modelled: a link entirely
+        inside a closed obstacle without touching its surface is not reported.
+    world_T_base : (4, 4) float
+        Pose of the robot base in the world.
+    margin : float, metres, >= 0
+        Security margin for robot-vs-obstacle (and floor) pairs: closer than ``margin`` counts
+        as a collision. Self-collision pairs use no margin.
+    floor : bool
+        Also test the moving links against the floor half-space z < 0 (world).
+    """
+
+    def __init__(self, robot, obstacle: trimesh.Trimesh | None = None, world_T_base=np.eye(4),
+                 margin: float = 0.0, floor: bool = False):
+        if obstacle is not None and not isinstance(obstacle, trimesh.Trimesh):
+            raise ValueError(f"obstacle must be a trimesh.Trimesh or None, got {type(obstacle).__name__}")
+        if obstacle is not None and len(obstacle.faces) == 0:
+            raise ValueError("obstacle must have at least one face")
+        self.margin = float(check_nonnegative("margin", margin))
+        self.robot = robot
+        model = robot.model
+        gm = robot.collision_model.copy()
+        n_robot = len(gm.geometryObjects)
+        parents = list(model.parents)
+        for a in range(n_robot):
+            for b in range(a + 1, n_robot):
+                ja, jb = gm.geometryObjects[a].parentJoint, gm.geometryObjects[b].parentJoint
+                if ja != jb and parents[ja] != jb and parents[jb] != ja:
+                    gm.addCollisionPair(pin.CollisionPair(a, b))
+        self._self_pairs = len(gm.collisionPairs)
+        self._world_ids = []
+        if obstacle is not None:
+            oid = gm.addGeometryObject(pin.GeometryObject(_OBSTACLE, 0, 0, pin.SE3.Identity(), bvh_from_mesh(obstacle)))
+            self._world_ids.append((oid, np.eye(4)))
+            for a in range(n_robot):
+                gm.addCollisionPair(pin.CollisionPair(a, oid))
+        if floor:
+            world_T_floor = np.eye(4)
+            world_T_floor[2, 3] = -_FLOOR_SIZE[2] / 2
+            fid = gm.addGeometryObject(pin.GeometryObject(_FLOOR, 0, 0, pin.SE3.Identity(), coal.Box(*_FLOOR_SIZE)))
+            self._world_ids.append((fid, world_T_floor))
+            for a in range(n_robot):
+                if gm.geometryObjects[a].parentJoint != 0:  # the base itself rests on the floor
+                    gm.addCollisionPair(pin.CollisionPair(a, fid))
+        self.geometry_model = gm
+        self._data = model.createData()
+        self._gdata = pin.GeometryData(gm)
+        for k in range(self._self_pairs, len(gm.collisionPairs)):
+            self._gdata.collisionRequests[k].security_margin = self.margin
+        self.set_base(world_T_base)
+
+    @property
+    def n_pairs(self) -> int:
+        """Number of tested geometry pairs (self + world)."""
+        return len(self.geometry_model.collisionPairs)
+
+    def set_base(self, world_T_base) -> None:
+        """Move the robot base to ``world_T_base`` (4, 4) (i.e. move the world under it)."""
+        world_T_base = _check_pose("world_T_base", world_T_base)
+        self.world_T_base = world_T_base
+        base_T_world = np.linalg.inv(world_T_base)
+        for gid, world_T_obj in self._world_ids:
+            self.geometry_model.geometryObjects[gid].placement = pin.SE3(base_T_world @ world_T_obj)
+
+    def in_collision(self, q):
+        """Collision status of configurations.
+
+        Parameters
+        ----------
+        q : (nq,) or (n, nq) float, rad
+
+        Returns
+        -------
+        bool, or (n,) bool
+        """
+        qa, single = _check_q(self.robot, q)
+        out = np.empty(qa.shape[0], dtype=bool)
+        for i, qi in enumerate(qa):
+            out[i] = pin.computeCollisions(self.robot.model, self._data, self.geometry_model, self._gdata, qi, True)
+        return bool(out[0]) if single else out
+
+    def colliding_pairs(self, q) -> list[tuple[str, str]]:
+        """Names of the colliding geometry pairs at one configuration ``q`` (nq,) (diagnostics)."""
+        qa, single = _check_q(self.robot, q)
+        if not single:
+            raise ValueError(f"q must have shape ({self.robot.nq},) for colliding_pairs, got {np.shape(q)}")
+        pin.computeCollisions(self.robot.model, self._data, self.geometry_model, self._gdata, qa[0], False)
+        objs = self.geometry_model.geometryObjects
+        return [
+            (objs[cp.first].name, objs[cp.second].name)
+            for cp, res in zip(self.geometry_model.collisionPairs, self._gdata.collisionResults)
+            if res.isCollision()
+        ]

@@ -1,0 +1,323 @@
+"""Robot models used by both papers, built as pinocchio models with coal collision geometry.
+
+* ``ur10_mobile``: stand-in for MAVAC's Doosan M1013 on a MiR200 (see DESIGN.md, Stand-ins):
+  the UR10 of example-robot-data mounted at the centre of the top of a MiR200-sized box,
+  carrying the vacuum tool (tube + sphere) and an Azure Kinect on the flange.
+* ``puma560``: Kabir et al.'s simulated Puma 560, built from Corke's standard DH table.
+
+The root (universe) frame of every model is the robot *base* frame; its pose in the world is
+``world_T_base`` (for the mobile robot: ``se2_to_matrix(x, y, theta)``, base frame on the
+floor under the centre of the platform).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import coal
+import example_robot_data
+import numpy as np
+import pinocchio as pin
+
+from ..validate import check_nonnegative, check_range
+
+# MiR200 footprint and deck height (MiR200 datasheet: 890 x 580 mm, 352 mm high); MAVAC,
+# "Experimental setup": the arm is mounted at the centre of the MiR200.
+MIR200_SIZE = (0.89, 0.58, 0.35)
+# Vacuum tool of MAVAC Fig. 5: a long tube ending in a perforated sphere (dimensions ours).
+TOOL_TUBE_LENGTH = 0.40
+TOOL_TUBE_RADIUS = 0.02
+TOOL_SPHERE_RADIUS = 0.025
+# Azure Kinect DK body 103 x 39 x 126 mm (Microsoft hardware specification), mounted on top
+# of the tube next to the flange.
+KINECT_SIZE = (0.039, 0.103, 0.126)  # along camera x (optical axis), y, z
+
+# Corke's standard DH Puma 560 (Robotics Toolbox for MATLAB, models/mdl_puma560.m;
+# kinematics from Corke & Armstrong-Helouvry, ICRA 1994; joint limits from Wang & Chen,
+# IEEE T-RA 7(4) 1991, as quoted in that file). Columns: a, d, alpha (m, m, rad).
+PUMA560_DH = np.array(
+    [
+        [0.0, 0.0, np.pi / 2],
+        [0.4318, 0.0, 0.0],
+        [0.0203, 0.15005, -np.pi / 2],
+        [0.0, 0.4318, np.pi / 2],
+        [0.0, 0.0, -np.pi / 2],
+        [0.0, 0.0, 0.0],
+    ]
+)
+PUMA560_QLIM_DEG = np.array(
+    [[-160, 160], [-45, 225], [-225, 45], [-110, 170], [-100, 100], [-266, 266]], dtype=float
+)
+# Robotics Toolbox for Python (models/DH/Puma560.py): "from mounting surface to shoulder axis".
+PUMA560_PEDESTAL_HEIGHT = 0.672
+
+ROBOT_NAMES = ("ur10_mobile", "puma560")
+
+
+@dataclass
+class RobotModel:
+    """A fixed-base serial arm: pinocchio kinematic model plus coal collision geometry.
+
+    Attributes
+    ----------
+    name : str
+    model : pinocchio.Model
+        Root (universe) = robot base frame.
+    collision_model, visual_model : pinocchio.GeometryModel
+    tool_frame : str
+        Frame whose z axis is the tool axis (pointing out of the tool into the surface).
+    camera_frame : str or None
+        Camera frame, MAVAC convention: optical axis = camera x axis (= tool z).
+    q_home : (nq,) float, rad
+        A collision-free, non-singular configuration.
+    notes : str
+    dh : (nq, 3) float or None
+        Standard DH table (a, d, alpha) when the model was built from one (enables the
+        closed-form inverse kinematics).
+    manipulability_max : float or None
+        Normaliser of the Yoshikawa manipulability at ``tool_frame`` (see
+        ``kinematics.maneuverability``), estimated once per model.
+    """
+
+    name: str
+    model: pin.Model
+    collision_model: pin.GeometryModel
+    visual_model: pin.GeometryModel
+    tool_frame: str
+    camera_frame: str | None
+    q_home: np.ndarray
+    notes: str = ""
+    dh: np.ndarray | None = None
+    manipulability_max: float | None = None
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def nq(self) -> int:
+        return int(self.model.nq)
+
+    @property
+    def q_lower(self) -> np.ndarray:
+        return np.array(self.model.lowerPositionLimit, dtype=float)
+
+    @property
+    def q_upper(self) -> np.ndarray:
+        return np.array(self.model.upperPositionLimit, dtype=float)
+
+
+def se2_to_matrix(x: float, y: float, theta: float) -> np.ndarray:
+    """Planar base pose ``(x, y, theta)`` (m, m, rad) -> ``world_T_base`` (4, 4)."""
+    for name, v in (("x", x), ("y", y), ("theta", theta)):
+        check_range(name, v)
+    c, s = np.cos(theta), np.sin(theta)
+    T = np.eye(4)
+    T[:2, :2] = [[c, -s], [s, c]]
+    T[:2, 3] = [x, y]
+    return T
+
+
+def _translation(x=0.0, y=0.0, z=0.0) -> pin.SE3:
+    return pin.SE3(np.eye(3), np.array([x, y, z], dtype=float))
+
+
+def _geometry(name, parent_joint, parent_frame, shape, placement, color=(0.6, 0.6, 0.6, 1.0)):
+    g = pin.GeometryObject(name, parent_joint, parent_frame, placement, shape)
+    g.meshColor = np.asarray(color, dtype=float)
+    return g
+
+
+def _add_to_both(collision, visual, geometry):
+    collision.addGeometryObject(geometry)
+    visual.addGeometryObject(geometry.copy())
+
+
+def _with_manipulability_max(robot: RobotModel) -> RobotModel:
+    from .kinematics import estimate_manipulability_max
+
+    robot.manipulability_max = estimate_manipulability_max(robot)
+    return robot
+
+
+def ur10_mobile() -> RobotModel:
+    """UR10 (example-robot-data) on a MiR200-sized SE(2) base, with vacuum tool and camera.
+
+    Base frame: on the floor under the centre of the platform, x forward (long side), z up.
+    The arm base sits at the centre of the box top, ``base_T_arm`` = translation (0, 0, 0.35).
+    Frames ``tool_tip`` (centre of the tool sphere, z along the tube) and ``camera``
+    (x = optical axis = tool z) are attached to the flange ``tool0``.
+    Joint limits are those of example-robot-data's ``ur10_robot.urdf`` (+-2 pi, elbow +-pi).
+    """
+    ur = example_robot_data.load("ur10")
+    root = pin.Model()
+    root.name = "ur10_mobile"
+    root_frame = root.addFrame(pin.Frame("mobile_base", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+    base_T_arm = _translation(z=MIR200_SIZE[2])
+    empty_c, empty_v = pin.GeometryModel(), pin.GeometryModel()
+    model, collision = pin.appendModel(root, ur.model, empty_c, ur.collision_model, root_frame, base_T_arm)
+    _, visual = pin.appendModel(root, ur.model, empty_v, ur.visual_model, root_frame, base_T_arm)
+
+    # The example-robot-data "ee_link" box duplicates the flange; the tool replaces it.
+    for g in ("ee_link_0",):
+        if collision.existGeometryName(g):
+            collision.removeGeometryObject(g)
+        if visual.existGeometryName(g):
+            visual.removeGeometryObject(g)
+
+    box = coal.Box(*MIR200_SIZE)
+    _add_to_both(
+        collision,
+        visual,
+        _geometry("mir200_base", 0, root_frame, box, _translation(z=MIR200_SIZE[2] / 2), (0.3, 0.3, 0.35, 1.0)),
+    )
+
+    flange_id = model.getFrameId("tool0")
+    flange = model.frames[flange_id]
+    joint = flange.parentJoint
+    joint_T_flange = flange.placement
+    tool_grey = (0.75, 0.75, 0.8, 1.0)
+    tube = _geometry(
+        "tool_tube", joint, flange_id, coal.Cylinder(TOOL_TUBE_RADIUS, TOOL_TUBE_LENGTH),
+        joint_T_flange * _translation(z=TOOL_TUBE_LENGTH / 2), tool_grey,
+    )
+    sphere = _geometry(
+        "tool_sphere", joint, flange_id, coal.Sphere(TOOL_SPHERE_RADIUS),
+        joint_T_flange * _translation(z=TOOL_TUBE_LENGTH), tool_grey,
+    )
+    _add_to_both(collision, visual, tube)
+    _add_to_both(collision, visual, sphere)
+    model.addFrame(
+        pin.Frame("tool_tip", joint, flange_id, joint_T_flange * _translation(z=TOOL_TUBE_LENGTH), pin.FrameType.OP_FRAME)
+    )
+    # Camera on top of the tube (flange +x side), near the flange; camera x = tool z,
+    # camera y = tool y, camera z = -tool x (right-handed).
+    flange_R_camera = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    cam_offset = TOOL_TUBE_RADIUS + KINECT_SIZE[2] / 2 + 0.005
+    flange_T_camera = pin.SE3(flange_R_camera, np.array([cam_offset, 0.0, 0.06]))
+    model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_flange * flange_T_camera, pin.FrameType.OP_FRAME))
+    _add_to_both(
+        collision, visual,
+        _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_flange * flange_T_camera, (0.1, 0.1, 0.1, 1.0)),
+    )
+
+    # Elbow up, tool tip ~(1.0, 0, 0.8) m pointing forward and 60 deg down, wrist away from
+    # q5 = 0 (wrist singularity); a high-maneuverability IK solution for that target.
+    q_home = np.array([-0.22, -1.46, 1.31, -1.94, -1.46, 0.0])
+    robot = RobotModel(
+        name="ur10_mobile",
+        model=model,
+        collision_model=collision,
+        visual_model=visual,
+        tool_frame="tool_tip",
+        camera_frame="camera",
+        q_home=q_home,
+        notes=(
+            "Stand-in for MAVAC's Doosan M1013 on a MiR200: UR10 (example-robot-data, ur10_robot.urdf) "
+            "at the centre of a 0.89 x 0.58 x 0.35 m box; vacuum tool = 0.40 m tube (r 2 cm) + "
+            "5 cm sphere on tool0; Azure Kinect on top of the tube, optical axis = camera x = tool z."
+        ),
+    )
+    return _with_manipulability_max(robot)
+
+
+def _dh_placement(a: float, d: float, alpha: float) -> pin.SE3:
+    """Constant part ``Tz(d) Tx(a) Rx(alpha)`` of a standard DH link transform."""
+    c, s = np.cos(alpha), np.sin(alpha)
+    R = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    return pin.SE3(R, np.array([a, 0.0, d]))
+
+
+def _cylinder_between(name, joint, frame, p0, p1, radius, color):
+    """A coal cylinder from ``p0`` to ``p1`` (joint frame) attached to ``joint``."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    axis = p1 - p0
+    length = float(np.linalg.norm(axis))
+    z = axis / length
+    R = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), z).matrix()
+    return _geometry(name, joint, frame, coal.Cylinder(radius, length), pin.SE3(R, (p0 + p1) / 2), color)
+
+
+def puma560(tool_length: float = 0.0) -> RobotModel:
+    """Puma 560 from Corke's standard DH parameters (``mdl_puma560``), base frame at the shoulder.
+
+    Joint ``i`` rotates about ``z_{i-1}``; pinocchio joint ``i+1`` is placed at
+    ``Tz(d_i) Tx(a_i) Rx(alpha_i)`` in joint ``i``'s frame, so the chain reproduces
+    ``A_i = Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``. Frame ``tool`` sits ``tool_length`` m along
+    ``z_6``. Collision geometry: one cylinder per link (radii ours, approximate), a pedestal of
+    0.672 m below the shoulder, and the tool shaft.
+
+    Parameters
+    ----------
+    tool_length : float, metres, >= 0
+    """
+    check_nonnegative("tool_length", tool_length)
+    tool_length = float(tool_length)
+    model = pin.Model()
+    model.name = "puma560"
+    lower = np.deg2rad(PUMA560_QLIM_DEG[:, 0])
+    upper = np.deg2rad(PUMA560_QLIM_DEG[:, 1])
+    parent, placement = 0, pin.SE3.Identity()
+    joints = []
+    for i in range(6):
+        jid = model.addJoint(
+            parent, pin.JointModelRZ(), placement, f"joint{i + 1}",
+            np.full(1, 100.0), np.full(1, 5.0), lower[i : i + 1], upper[i : i + 1],
+        )
+        model.appendBodyToJoint(jid, pin.Inertia.FromCylinder(1.0, 0.05, 0.1), pin.SE3.Identity())
+        model.addFrame(pin.Frame(f"link{i + 1}", jid, 0, pin.SE3.Identity(), pin.FrameType.BODY))
+        joints.append(jid)
+        a, d, alpha = PUMA560_DH[i]
+        parent, placement = jid, _dh_placement(a, d, alpha)
+    flange_frame = model.addFrame(pin.Frame("flange", joints[-1], 0, placement, pin.FrameType.OP_FRAME))
+    model.addFrame(pin.Frame("tool", joints[-1], flange_frame, placement * _translation(z=tool_length), pin.FrameType.OP_FRAME))
+
+    a2, d3, a3, d4 = PUMA560_DH[1, 0], PUMA560_DH[2, 1], PUMA560_DH[2, 0], PUMA560_DH[3, 1]
+    collision, visual = pin.GeometryModel(), pin.GeometryModel()
+    grey, orange = (0.7, 0.7, 0.7, 1.0), (0.9, 0.5, 0.1, 1.0)
+    fid = lambda j: model.getFrameId(f"link{j}")  # noqa: E731
+    parts = [
+        # pedestal under the shoulder housing (universe)
+        _cylinder_between("pedestal", 0, 0, [0, 0, -PUMA560_PEDESTAL_HEIGHT], [0, 0, -0.25], 0.10, grey),
+        # shoulder housing: vertical cylinder around z0 (joint 1 frame)
+        _cylinder_between("link1", joints[0], fid(1), [0, 0, -0.25], [0, 0, 0.10], 0.09, grey),
+        # upper arm: from the shoulder to the elbow along x of joint 2, offset towards d3
+        _cylinder_between("link2", joints[1], fid(2), [0, 0, 0.10], [a2, 0, 0.10], 0.06, grey),
+        # elbow housing about the elbow axis (z of joint 3)
+        _cylinder_between("link3", joints[2], fid(3), [0, 0, 0.04], [0, 0, d3 + 0.05], 0.06, grey),
+        # forearm: along z of joint 4 from just past the elbow to before the wrist centre
+        _cylinder_between("link4", joints[3], fid(4), [0, 0, 0.10], [0, 0, d4 - 0.06], 0.045, grey),
+        # wrist: about z of joint 5 through the wrist centre
+        _cylinder_between("link5", joints[4], fid(5), [0, 0, -0.04], [0, 0, 0.04], 0.04, grey),
+    ]
+    if tool_length > 0.06:
+        parts.append(
+            _cylinder_between("tool", joints[5], fid(6), [0, 0, 0.05], [0, 0, tool_length], 0.02, orange)
+        )
+    for g in parts:
+        _add_to_both(collision, visual, g)
+
+    # Corke's nominal pose qn = [0, pi/4, pi, 0, pi/4, 0] with q3 = pi taken as -pi (inside
+    # [-225, 45] deg).
+    q_home = np.array([0.0, np.pi / 4, -np.pi, 0.0, np.pi / 4, 0.0])
+    robot = RobotModel(
+        name="puma560",
+        model=model,
+        collision_model=collision,
+        visual_model=visual,
+        tool_frame="tool",
+        camera_frame=None,
+        q_home=q_home,
+        notes=(
+            "Puma 560, standard DH of Corke's mdl_puma560 (Corke & Armstrong-Helouvry 1994); joint "
+            "limits from Wang & Chen 1991 as in mdl_puma560; base frame at the shoulder "
+            f"(pedestal 0.672 m below); tool_length = {tool_length} m along z6."
+        ),
+        dh=PUMA560_DH.copy(),
+    )
+    return _with_manipulability_max(robot)
+
+
+def load_robot(name: str, **kwargs) -> RobotModel:
+    """Robot by name: ``"ur10_mobile"`` or ``"puma560"`` (kwargs go to the builder)."""
+    builders = {"ur10_mobile": ur10_mobile, "puma560": puma560}
+    if name not in builders:
+        raise ValueError(f"name must be one of {ROBOT_NAMES}, got {name!r}")
+    return builders[name](**kwargs)

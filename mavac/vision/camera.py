@@ -1,0 +1,226 @@
+"""MAVAC's emulated camera: the FOV pyramid test and guard camera poses.
+
+Camera frame (MAVAC, "Camera field of view (FOV)"): the optical axis is the camera **x** axis,
+``y`` spans the image width and ``z`` the image height. A world point ``s`` seen from
+``world_T_camera`` is written ``p_m = [x_c, y_c, z_c]`` in the camera frame and lies in the FOV
+iff
+
+1. ``0 < x_c <= L_d`` (in front of the camera, within the reliable detection limit),
+2. ``|atan2(y_c, x_c)| <= theta_a`` (projection on the camera XY plane),
+3. ``|atan2(z_c, x_c)| <= theta_b`` (projection on the camera XZ plane).
+
+With ``x_c > 0`` conditions 2-3 are evaluated as ``|y_c| <= x_c tan(theta_a)`` (identical
+sets, no trigonometry per point). A guard camera sits exactly ``L_d`` from its target along
+the normal, so a flat surface facing it lies *on* the far plane ``x_c = L_d``; condition 1 is
+therefore tested with a relative tolerance of ``1e-9`` (``x_c <= L_d (1 + 1e-9)``) so that
+rounding does not split such a surface at random.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..params import CameraParams
+from ..validate import check_points, check_positive
+
+# Cameras x points evaluated per block in fov_masks: bounds the (block, n, 3) temporaries.
+_FOV_BLOCK_ELEMENTS = 2_000_000
+# Relative tolerance on the far plane x_c = L_d (see module docstring).
+_FAR_PLANE_RTOL = 1e-9
+
+
+def check_transforms(name: str, transforms) -> np.ndarray:
+    """Validate homogeneous rigid transforms.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name used in the error message.
+    transforms : (4, 4) or (m, 4, 4) float
+
+    Returns
+    -------
+    (m, 4, 4) float
+        The transforms (a single one is promoted); ``ValueError`` unless finite, with an
+        orthonormal rotation of determinant +1 (tolerance 1e-6) and last row ``0 0 0 1``.
+    """
+    T = np.asarray(transforms, dtype=float)
+    if T.ndim == 2:
+        T = T[None]
+    if T.ndim != 3 or T.shape[1:] != (4, 4):
+        raise ValueError(f"{name} must have shape (4, 4) or (m, 4, 4), got {T.shape}")
+    if not np.all(np.isfinite(T)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    R = T[:, :3, :3]
+    should_be_identity = np.einsum("mji,mjk->mik", R, R)
+    if not np.allclose(should_be_identity, np.eye(3), atol=1e-6) or not np.allclose(
+        T[:, 3], [0.0, 0.0, 0.0, 1.0]
+    ):
+        raise ValueError(f"{name} must be rigid transforms (orthonormal rotation, last row 0 0 0 1)")
+    if np.any(np.linalg.det(R) < 0):
+        raise ValueError(f"{name} rotation has determinant -1 (a reflection), expected +1")
+    return T
+
+
+def points_in_camera(points_world, world_T_cameras) -> np.ndarray:
+    """World points expressed in each camera frame.
+
+    Parameters
+    ----------
+    points_world : (n, 3) float, metres
+    world_T_cameras : (m, 4, 4) or (4, 4) float
+        Camera poses in the world.
+
+    Returns
+    -------
+    (m, n, 3) float, metres
+        ``camera_T_world @ s`` for every camera and point.
+    """
+    P = check_points("points_world", points_world)
+    T = check_transforms("world_T_cameras", world_T_cameras)
+    # camera_T_world = [R^T, -R^T t]: p_c = R^T (s - t), i.e. row vectors (s - t)^T R.
+    return (P[None, :, :] - T[:, None, :3, 3]) @ T[:, :3, :3]
+
+
+def fov_masks(points_world, world_T_cameras, camera: CameraParams) -> np.ndarray:
+    """MAVAC FOV pyramid test of every point against every camera.
+
+    Parameters
+    ----------
+    points_world : (n, 3) float, metres
+        Surface points S in the world frame.
+    world_T_cameras : (m, 4, 4) float
+        Camera poses (optical axis = camera x).
+    camera : CameraParams
+        Half-angles ``theta_a``, ``theta_b`` (rad) and depth limit ``L_d`` (m).
+
+    Returns
+    -------
+    (m, n) bool
+        ``True`` where point j is inside the FOV pyramid of camera i (boundaries included,
+        far plane with a 1e-9 relative tolerance).
+    """
+    P = check_points("points_world", points_world)
+    T = check_transforms("world_T_cameras", world_T_cameras)
+    tan_a, tan_b = np.tan(camera.theta_a), np.tan(camera.theta_b)
+    far = camera.L_d * (1.0 + _FAR_PLANE_RTOL)
+    out = np.zeros((T.shape[0], P.shape[0]), dtype=bool)
+    block = max(1, _FOV_BLOCK_ELEMENTS // max(1, P.shape[0]))
+    for start in range(0, T.shape[0], block):
+        pc = points_in_camera(P, T[start : start + block])
+        x, y, z = pc[..., 0], pc[..., 1], pc[..., 2]
+        out[start : start + block] = (
+            (x > 0.0) & (x <= far) & (np.abs(y) <= x * tan_a) & (np.abs(z) <= x * tan_b)
+        )
+    return out
+
+
+def fov_mask(points_world, world_T_camera, camera: CameraParams) -> np.ndarray:
+    """MAVAC FOV pyramid test for one camera.
+
+    Parameters
+    ----------
+    points_world : (n, 3) float, metres
+    world_T_camera : (4, 4) float
+        Camera pose in the world (optical axis = camera x).
+    camera : CameraParams
+
+    Returns
+    -------
+    (n,) bool
+        ``True`` for points inside the pyramid (see :func:`fov_masks`).
+    """
+    T = np.asarray(world_T_camera, dtype=float)
+    if T.shape != (4, 4):
+        raise ValueError(f"world_T_camera must have shape (4, 4), got {T.shape}")
+    return fov_masks(points_world, T[None], camera)[0]
+
+
+def camera_pose_looking_at(target, normal, distance) -> np.ndarray:
+    """Guard camera pose: ``distance`` along the surface normal, looking back at the target.
+
+    MAVAC ("Local exploration"): the guard point is placed along the surface normal at the
+    reliable detection limit and the tool is oriented by the normal. The camera origin is
+    ``target + n * distance`` and its x (optical) axis is ``-n``, so the target lies on the
+    optical axis at ``x_c = distance``. Roll about the optical axis is fixed deterministically:
+    camera z (image up) is world z projected orthogonally to the optical axis, or world x when
+    the optical axis is vertical to within ~5e-5 rad (camera looking straight down or up);
+    camera y completes a right-handed frame.
+
+    Parameters
+    ----------
+    target : (3,) float, metres
+        Surface point to look at.
+    normal : (3,) float
+        Outward surface normal at the target (normalised here; must be non-zero).
+    distance : float, metres
+        Stand-off, > 0 (usually ``CameraParams.L_d``).
+
+    Returns
+    -------
+    (4, 4) float
+        ``world_T_camera``.
+    """
+    p = check_points("target", target)
+    if p.shape[0] != 1:
+        raise ValueError(f"target must have shape (3,), got {np.shape(target)}")
+    n = check_points("normal", normal)
+    if n.shape[0] != 1:
+        raise ValueError(f"normal must have shape (3,), got {np.shape(normal)}")
+    check_positive("distance", distance)
+    norm = np.linalg.norm(n[0])
+    if norm < 1e-12:
+        raise ValueError("normal must be a non-zero vector")
+    n = n[0] / norm
+    x_axis = -n
+    up = np.array([0.0, 0.0, 1.0])
+    if abs(x_axis @ up) > 1.0 - 1e-9:
+        up = np.array([1.0, 0.0, 0.0])
+    z_axis = up - (up @ x_axis) * x_axis
+    z_axis /= np.linalg.norm(z_axis)
+    y_axis = np.cross(z_axis, x_axis)
+    world_T_camera = np.eye(4)
+    world_T_camera[:3, :3] = np.column_stack([x_axis, y_axis, z_axis])
+    world_T_camera[:3, 3] = p[0] + n * float(distance)
+    return world_T_camera
+
+
+def fov_pyramid_corners(world_T_camera, camera: CameraParams) -> np.ndarray:
+    """Apex and the four far corners of the FOV pyramid, in the world frame.
+
+    Returns
+    -------
+    (5, 3) float, metres
+        Row 0 is the camera origin; rows 1-4 the corners at ``x_c = L_d`` in the order
+        (+y,+z), (-y,+z), (-y,-z), (+y,-z).
+    """
+    T = np.asarray(world_T_camera, dtype=float)
+    if T.shape != (4, 4):
+        raise ValueError(f"world_T_camera must have shape (4, 4), got {T.shape}")
+    T = check_transforms("world_T_camera", T)[0]
+    L = camera.L_d
+    wy, wz = L * np.tan(camera.theta_a), L * np.tan(camera.theta_b)
+    local = np.array(
+        [[0.0, 0.0, 0.0], [L, wy, wz], [L, -wy, wz], [L, -wy, -wz], [L, wy, -wz]]
+    )
+    return local @ T[:3, :3].T + T[:3, 3]
+
+
+def fov_pyramid_lines(world_T_camera, camera: CameraParams) -> np.ndarray:
+    """Edges of the FOV pyramid for plotting (MAVAC Fig. 3).
+
+    Parameters
+    ----------
+    world_T_camera : (4, 4) float
+    camera : CameraParams
+
+    Returns
+    -------
+    (8, 2, 3) float, metres
+        Segments ``[start, end]``: four from the apex to the far corners, then the four edges
+        of the far rectangle at ``x_c = L_d``.
+    """
+    c = fov_pyramid_corners(world_T_camera, camera)
+    apex_edges = [(0, k) for k in range(1, 5)]
+    base_edges = [(1, 2), (2, 3), (3, 4), (4, 1)]
+    return np.array([[c[i], c[j]] for i, j in apex_edges + base_edges])

@@ -1,0 +1,107 @@
+import numpy as np
+import pytest
+import trimesh
+
+from mavac.robots import kinematics as K
+from mavac.robots.collision import CollisionChecker
+from mavac.robots.models import puma560, se2_to_matrix, ur10_mobile
+
+
+@pytest.fixture(scope="module")
+def ur10():
+    return ur10_mobile()
+
+
+@pytest.fixture(scope="module")
+def box_at_tool(ur10):
+    """A 0.3 m box centred on the tool tip at the home configuration (base at the origin)."""
+    tip = K.fk(ur10, ur10.q_home)[:3, 3]
+    box = trimesh.creation.box((0.3, 0.3, 0.3))
+    box.apply_translation(tip)
+    return box
+
+
+def test_home_is_free_without_obstacle(ur10):
+    checker = CollisionChecker(ur10)
+    assert checker.in_collision(ur10.q_home) is False
+    assert CollisionChecker(puma560(0.2)).in_collision(puma560(0.2).q_home) is False
+
+
+def test_tool_into_box_collides_and_moving_base_away_frees_it(ur10, box_at_tool):
+    checker = CollisionChecker(ur10, box_at_tool)
+    assert checker.in_collision(ur10.q_home)
+    names = {n for pair in checker.colliding_pairs(ur10.q_home) for n in pair}
+    assert "obstacle" in names and names & {"tool_tube", "tool_sphere", "camera_body"}
+    checker.set_base(se2_to_matrix(-5.0, 0.0, 0.0))
+    assert not checker.in_collision(ur10.q_home)
+    far = CollisionChecker(ur10, box_at_tool, world_T_base=se2_to_matrix(0.0, 10.0, 1.0))
+    assert not far.in_collision(ur10.q_home)
+
+
+def test_margin_reports_near_misses(ur10):
+    tip = K.fk(ur10, ur10.q_home)[:3, 3]
+    box = trimesh.creation.box((0.2, 0.2, 0.2))
+    box.apply_translation(tip + [0.0, 0.3, 0.0])  # beside the tool tip, ~0.15 m clear
+    clear = CollisionChecker(ur10, box)
+    padded = CollisionChecker(ur10, box, margin=0.5)
+    assert not clear.in_collision(ur10.q_home)
+    assert padded.in_collision(ur10.q_home)
+
+
+def test_base_box_against_obstacle(ur10):
+    """An obstacle overlapping the mobile base blocks every configuration."""
+    box = trimesh.creation.box((0.4, 0.4, 0.2))
+    box.apply_translation([0.3, 0.0, 0.1])
+    checker = CollisionChecker(ur10, box)
+    assert checker.in_collision(np.vstack([ur10.q_home, np.zeros(6)])).all()
+
+
+def test_folded_arm_self_collides(ur10):
+    checker = CollisionChecker(ur10)
+    folded = np.array([0.0, -1.46, 2.9, 0.0, 0.0, 0.0])  # elbow folded onto the upper arm
+    assert checker.in_collision(folded)
+    pairs = checker.colliding_pairs(folded)
+    assert any("upper_arm_link_0" in p for p in pairs)
+    into_base = ur10.q_home.copy()
+    into_base[1] = 0.4  # shoulder swung back and down: upper arm into the platform
+    assert ("upper_arm_link_0", "mir200_base") in checker.colliding_pairs(into_base)
+
+
+def test_floor(ur10):
+    down = ur10.q_home.copy()
+    down[1:3] = [-0.34, 1.0]  # arm lowered in front of the platform: the tool tip goes below z = 0
+    assert K.fk(ur10, down)[2, 3] < -0.1
+    assert not CollisionChecker(ur10).in_collision(down)
+    assert CollisionChecker(ur10, floor=True).in_collision(down)
+    assert not CollisionChecker(ur10, floor=True).in_collision(ur10.q_home)
+
+
+def test_batched_matches_single(ur10, box_at_tool):
+    checker = CollisionChecker(ur10, box_at_tool)
+    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (30, 6))
+    batched = checker.in_collision(q)
+    assert batched.shape == (30,) and batched.dtype == bool
+    assert 0 < batched.sum() < 30
+    assert [checker.in_collision(qi) for qi in q] == batched.tolist()
+
+
+def test_adjacent_links_are_not_paired(ur10):
+    checker = CollisionChecker(ur10)
+    gm, model = checker.geometry_model, ur10.model
+    for cp in gm.collisionPairs:
+        ja, jb = gm.geometryObjects[cp.first].parentJoint, gm.geometryObjects[cp.second].parentJoint
+        assert ja != jb and model.parents[ja] != jb and model.parents[jb] != ja
+
+
+def test_bad_inputs(ur10):
+    with pytest.raises(ValueError, match="obstacle"):
+        CollisionChecker(ur10, obstacle="box.stl")
+    with pytest.raises(ValueError, match="margin"):
+        CollisionChecker(ur10, margin=-0.1)
+    with pytest.raises(ValueError, match="world_T_base"):
+        CollisionChecker(ur10, world_T_base=np.ones((4, 4)))
+    checker = CollisionChecker(ur10)
+    with pytest.raises(ValueError, match="q"):
+        checker.in_collision(np.zeros(3))
+    with pytest.raises(ValueError, match="q contains NaN"):
+        checker.in_collision(np.full(6, np.nan))
