@@ -1,0 +1,1 @@
+"""Simulation: worlds, controllers and simulated cleaning models (dust, scrubbing)."""
