@@ -119,8 +119,8 @@ class ScrubModel:
     Cartesian impedance mode, chosen so that C_p depends on all five operation parameters.
     """
 
-    # Preston coefficient: stain layers removed per (Pa x m of sliding). Ours, set so that
-    # the paper's Fig. 3 parameters remove about a quarter of a layer at unit hardness.
+    # Preston coefficient: stain layers removed per (Pa x m of sliding). Ours: a round value
+    # that puts the paper's C_p thresholds (0.6 bowl, 0.9 hull) inside the GPR bounds.
     preston: float = 1.0e-4
     # Contact patch of the sponge: 20 mm x 20 mm (ours).
     contact_width: float = 0.02
@@ -138,8 +138,9 @@ class ScrubModel:
     # The impedance controller's Cartesian path-deviation limit softly caps the oscillation
     # amplitude (ours, 10 mm).
     max_deviation: float = 0.01
-    # Tipping/chatter: contact fraction 1 / (1 + (A / (ratio f_n))^exponent) (ours).
-    tipping_ratio: float = 4.0
+    # Tipping/chatter: contact fraction 1 / (1 + (A / (ratio f_n))^exponent); half the
+    # contact is lost when the lateral force is 2.5 x the normal force (ours).
+    tipping_ratio: float = 2.5
     tipping_exponent: float = 4.0
     # Process noise: per-face and per-experiment log-normal factors on the removal (ours).
     face_noise: float = 0.10
@@ -185,22 +186,21 @@ class GPRParams:
     Cp_th: float = 0.60
     # Kabir, Sec. IX-C: P_th = 0.10 for the bowl (0.30 for the hull).
     P_th: float = 0.10
-    # Coarse uniform exploration (Sec. VIII): grid points per axis (2 -> 2^5 = 32 corners
-    # plus the centre). Ours.
+    # Normalise inputs on log scales (all five are positive scale-like quantities). Ours.
+    log_inputs: bool = True
+    # Coarse uniform exploration (Sec. VIII): grid points per axis, cell-centred (2 -> 2^5 =
+    # 32 points at 1/4 and 3/4 of each (log) range, plus the centre). Ours.
     grid_points: int = 2
     # Experiment budget (exploration included); the run stops there, feasible or not. Ours.
-    max_experiments: int = 80
+    max_experiments: int = 100
     # Candidate points per iteration (seeded Sobol, plus local ones around the incumbent). Ours.
     n_candidates: int = 2048
     # Objective weight on speed; 1 - speed_weight goes to (low) force. Ours (equal weights).
     speed_weight: float = 0.5
-    # Candidates within select_tol of the best objective count as ties, broken by the
-    # feasibility probability (the objective ignores kappa, f_x, A_x). Ours.
-    select_tol: float = 0.02
     # Convergence: stop when the best feasible objective improved by less than ``tol`` over
-    # ``patience`` exploitation experiments, or the same point is chosen twice. Ours.
+    # ``patience`` exploitation experiments, or the current answer is chosen again. Ours.
     tol: float = 0.005
-    patience: int = 8
+    patience: int = 20
     seed: int = 0
 
     def __post_init__(self):
@@ -215,13 +215,14 @@ class GPRParams:
             check_positive(f"{name}_bounds", getattr(self, f"{name}_bounds")[0])
         check_range("v_bounds", self.v_bounds[1], 0.0, 1.0)
         check_nonnegative("A_x_bounds", self.A_x_bounds[0])
+        if self.log_inputs:
+            check_positive("A_x_bounds", self.A_x_bounds[0])
         check_unit("Cp_th", self.Cp_th)
         check_range("P_th", self.P_th, 0.0, 1.0, lo_open=True, hi_open=True)
         check_int("grid_points", self.grid_points, 2, 5)
         check_int("max_experiments", self.max_experiments, 1)
         check_int("n_candidates", self.n_candidates, 16)
         check_unit("speed_weight", self.speed_weight)
-        check_nonnegative("select_tol", self.select_tol)
         check_nonnegative("tol", self.tol)
         check_int("patience", self.patience, 1)
         check_int("seed", self.seed, 0)
@@ -591,9 +592,11 @@ class NoSParams:
     """Non-observed surfaces (MAVAC, "Non-observed surface (NoS)", Fig. 4): DBSCAN clusters,
     outward ray fans, gateways, NoS guards checked with RRT-Connect."""
 
-    # Ours: DBSCAN radius, m (about two surface spacings) and minimum cluster size.
-    eps: float = 0.12
-    min_samples: int = 4
+    # Ours: DBSCAN radius as a multiple of the surface spacing (neighbouring elements of S are
+    # ~0.85 spacing apart, so 1.5 links neighbours without bridging across edges and gaps),
+    # and the minimum cluster size.
+    eps_factor: float = 1.5
+    min_samples: int = 3
     # Ours: rays per cluster (Fibonacci sphere) and the length a ray must travel free, m.
     n_rays: int = 400
     ray_length: float = 1.5
@@ -601,7 +604,7 @@ class NoSParams:
     origin_offset: float = 0.01
     # Ours: the NoS camera is tried on up to this many rays of the best gateway, closest to its
     # mean exit direction first (the paper uses the mean direction; one ray may be unreachable).
-    max_ray_tries: int = 8
+    max_ray_tries: int = 32
     # Ours: OMPL RRT-Connect time bound per NoS guard, s (MAVAC: RRT-Connect, Kuffner 2000).
     rrt_time_limit: float = 2.0
     # Ours: collision-check resolution of RRT-Connect (fraction of the space extent).
@@ -609,7 +612,7 @@ class NoSParams:
     enabled: bool = True
 
     def __post_init__(self):
-        check_positive("eps", self.eps)
+        check_positive("eps_factor", self.eps_factor)
         check_int("min_samples", self.min_samples, lo=1)
         check_int("n_rays", self.n_rays, lo=4)
         check_positive("ray_length", self.ray_length)

@@ -53,7 +53,9 @@ def test_puma_fk_matches_plain_dh(puma):
         A = np.eye(4)
         for qi, (a, d, alpha) in zip(q[i], PUMA560_DH):
             ct, st, ca, sa = np.cos(qi), np.sin(qi), np.cos(alpha), np.sin(alpha)
-            A = A @ np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]])
+            A = A @ np.array(
+                [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]]
+            )
         A = A @ np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.1], [0, 0, 0, 1]])
         np.testing.assert_allclose(T[i], A, atol=1e-9)
 
@@ -192,3 +194,42 @@ def test_bad_inputs_raise(ur10):
         K.ik(ur10, np.eye(4), n_restarts=-1)
     with pytest.raises(ValueError, match="k"):
         K.maneuverability(ur10, ur10.q_home, k=-1.0)
+
+
+def test_pose_residual_matches_scipy_including_near_pi():
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(10)
+    R = Rotation.random(600, random_state=11).as_matrix()
+    rv = Rotation.random(600, random_state=12).as_rotvec()
+    unit = rv / np.linalg.norm(rv, axis=1)[:, None]
+    angles = np.concatenate([rng.uniform(0, np.pi, 300), rng.uniform(np.pi - 0.15, np.pi, 200), np.full(100, 1e-10)])
+    rv = unit * angles[:, None]
+    R_target = Rotation.from_rotvec(rv).as_matrix() @ R
+    soa = lambda M: np.ascontiguousarray(M.transpose(2, 1, 0))  # noqa: E731
+    out, ang = K._pose_residual(soa(R), soa(R_target))
+    np.testing.assert_allclose(out.T, rv, atol=1e-9)
+    np.testing.assert_allclose(ang, angles, atol=1e-9)
+
+
+def test_ik_is_deterministic_and_uses_q0(ur10):
+    T = K.fk(ur10, _random_q(ur10, np.random.default_rng(13), 40))
+    a = K.ik(ur10, T, rng=np.random.default_rng(1))
+    b = K.ik(ur10, T, rng=np.random.default_rng(1))
+    np.testing.assert_array_equal(a.q, b.q)
+    # seeded at a solution, the first Newton step already converges there
+    c = K.ik(ur10, T[a.success], q0=a.q[a.success], n_restarts=0)
+    assert c.success.all()
+    np.testing.assert_allclose(c.q, a.q[a.success], atol=1e-6)
+
+
+def test_ik_axis_can_aim_the_camera_optical_axis(ur10):
+    rng = np.random.default_rng(14)
+    T = K.fk(ur10, _random_q(ur10, rng, 60), frame="camera")
+    res = K.ik_axis(ur10, T[:, :3, 3], T[:, :3, 0], frame="camera", frame_axis=0, rng=rng)
+    assert res.success.mean() >= 0.95
+    T2 = K.fk(ur10, res.q[res.success], frame="camera")
+    np.testing.assert_allclose(T2[:, :3, 3], T[res.success, :3, 3], atol=1e-4)
+    np.testing.assert_allclose(T2[:, :3, 0], T[res.success, :3, 0], atol=1e-3)
+    with pytest.raises(ValueError, match="frame_axis"):
+        K.ik_axis(ur10, T[:1, :3, 3], T[:1, :3, 0], frame_axis=3)

@@ -36,7 +36,9 @@ def _dh_fk(q, dh, tool_length):
     T = np.eye(4)
     for qi, (a, d, alpha) in zip(q, dh):
         ct, st, ca, sa = np.cos(qi), np.sin(qi), np.cos(alpha), np.sin(alpha)
-        T = T @ np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]])
+        T = T @ np.array(
+            [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]]
+        )
     tool = np.eye(4)
     tool[2, 3] = tool_length
     return T @ tool
@@ -62,7 +64,9 @@ def test_ur10_limits_are_the_urdf_limits(ur10):
 
 def test_ur10_arm_mounted_on_top_centre_of_base_box(ur10):
     base_T_arm = _frame_pose(ur10, ur10.q_home, "base_link")
-    np.testing.assert_allclose(base_T_arm, np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, MIR200_SIZE[2]], [0, 0, 0, 1]]), atol=1e-12)
+    expected = np.eye(4)
+    expected[2, 3] = MIR200_SIZE[2]
+    np.testing.assert_allclose(base_T_arm, expected, atol=1e-12)
     box = ur10.collision_model.geometryObjects[ur10.collision_model.getGeometryId("mir200_base")]
     assert box.parentJoint == 0
     np.testing.assert_allclose(2 * box.geometry.halfSide, MIR200_SIZE)
@@ -119,3 +123,38 @@ def test_load_robot():
         load_robot("kuka")
     with pytest.raises(ValueError, match="tool_length"):
         puma560(tool_length=-0.1)
+
+
+def test_pickle_rebuilds_small_and_keeps_q_home(puma):
+    import dataclasses
+    import pickle
+
+    robot = puma560(tool_length=0.15)
+    robot.q_home = robot.q_home + 0.01
+    blob = pickle.dumps(robot)
+    assert len(blob) < 2000  # builder call, not the geometry
+    back = pickle.loads(blob)
+    np.testing.assert_array_equal(back.q_home, robot.q_home)
+    assert back.manipulability_max == robot.manipulability_max
+    np.testing.assert_allclose(_frame_pose(back, back.q_home, "tool"), _frame_pose(robot, robot.q_home, "tool"))
+    # a hand-made variant pickles in full
+    variant = dataclasses.replace(puma, q_home=np.zeros(6))
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(variant)).q_home, np.zeros(6))
+
+
+def test_cached_chains_follow_the_model(puma):
+    """A variant with a new model (e.g. an extra frame) must not reuse the old chains."""
+    import dataclasses
+
+    from mavac.robots import kinematics as K
+
+    q = puma.q_home
+    before = K.fk(puma, q)
+    model = puma.model.copy()
+    j6 = model.getJointId("joint6")
+    model.frames[model.getFrameId("tool")].placement = pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.5]))
+    variant = dataclasses.replace(puma, model=model)  # shares puma._cache
+    after = K.fk(variant, q)
+    assert model.frames[model.getFrameId("tool")].parentJoint == j6
+    np.testing.assert_allclose(after[:3, 3], before[:3, 3] + (0.5 - 0.15) * before[:3, 2], atol=1e-12)
+    np.testing.assert_allclose(K.fk(puma, q), before)

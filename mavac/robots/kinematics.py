@@ -19,7 +19,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..validate import check_int, check_positive
 
@@ -40,7 +39,7 @@ class IKResult:
         Converged within the tolerances and within joint limits.
     position_error : (n,) float, metres
     rotation_error : (n,) float, rad
-        Full-pose: angle of ``R_target R^T``; axis IK: angle between tool z and the target axis.
+        Full-pose: angle of ``R_target R^T``; axis IK: angle between the frame axis and the target.
     """
 
     q: np.ndarray
@@ -99,10 +98,12 @@ def _check_q0(robot, q0, n) -> np.ndarray:
 
 
 def _chain(robot, frame: str) -> dict:
-    """Joint placements, axes and q indices from the root to ``frame`` (cached on the robot)."""
+    """Joint placements, axes and q indices from the root to ``frame`` (cached on the robot,
+    valid while ``robot.model`` is the same object)."""
     key = ("chain", frame)
-    if key in robot._cache:
-        return robot._cache[key]
+    hit = robot._cache.get(key)
+    if hit is not None and hit[0] is robot.model:
+        return hit[1]
     m = robot.model
     f = m.frames[m.getFrameId(frame)]
     joint_ids = list(m.supports[f.parentJoint])[1:]
@@ -122,64 +123,112 @@ def _chain(robot, frame: str) -> dict:
         K.append(Kj)
         K2.append(Kj @ Kj)
         idx.append(jm.idx_q)
+    axes = np.array([[Kj[2, 1], Kj[0, 2], Kj[1, 0]] for Kj in K])
     chain = {
         "R_M": np.array(R_M), "p_M": np.array(p_M), "K": np.array(K), "K2": np.array(K2),
-        "axis": np.array([[Kj[2, 1], Kj[0, 2], Kj[1, 0]] for Kj in K]), "idx": np.array(idx, dtype=int),
+        "axis": axes, "idx": np.array(idx, dtype=int),
+        # +x/+y/+z axes get closed-form column updates; -1 = general Rodrigues
+        "aligned": [int(np.argmax(ax)) if np.isclose(ax.max(), 1.0) else -1 for ax in axes],
+        "R_M_is_I": [bool(np.allclose(Rm, np.eye(3), atol=0.0, rtol=0.0)) for Rm in R_M],
         "R_f": f.placement.rotation.copy(), "p_f": f.placement.translation.copy(),
     }
-    robot._cache[key] = chain
+    robot._cache[key] = (m, chain)
     return chain
 
 
-def _rmul(R: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """``R @ M`` for a stack R (n,3,3) and one matrix M (3,3) (or vector (3,)), as one GEMM."""
-    out = R.reshape(-1, 3) @ M
-    return out.reshape(R.shape[0], 3, 3) if M.ndim == 2 else out.reshape(R.shape[0], 3)
+# Numeric core in structure-of-arrays layout, the batch index last: a rotation is ``C (3, 3, n)``
+# with ``C[j]`` its column j as a (3, n) array, a point ``(3, n)``, a Jacobian ``(6, nq, n)``.
+# Elementwise work then runs over long contiguous rows and constant products are single GEMMs.
+
+
+def _cmul(M: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """``R @ M`` for stacked rotations ``C`` (3, 3, n) and one matrix M (3, 3) -> (3, 3, n),
+    or ``R @ v`` for one vector v (3,) -> (3, n)."""
+    flat = C.reshape(3, -1)
+    if M.ndim == 2:
+        return (M.T @ flat).reshape(C.shape)
+    return (M @ flat).reshape(3, C.shape[2])
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (..., 3) arrays (cheaper than np.cross for small rows)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    """Cross product along axis 0 of (3, ...) arrays."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _forward(chain: dict, q: np.ndarray, with_joints: bool = False):
-    """Batched FK. Returns ``R (n,3,3)``, ``p (n,3)`` of the frame and, if asked, the joint
-    origins ``(n,k,3)`` and world joint axes ``(n,k,3)``.
+    """Batched FK in SoA layout for ``q`` (n, nq).
 
-    Each joint: ``T <- T * placement * exp(theta [axis])`` with Rodrigues'
-    ``exp = I + sin(theta) K + (1 - cos(theta)) K^2``; products with constant matrices are
-    single GEMMs over the stacked rows.
+    Returns ``C (3, 3, n)`` and ``p (3, n)`` of the frame and, if asked, the joint origins and
+    world joint axes ``(k, 3, n)``. Each joint: ``T <- T * placement * exp(theta [axis])``,
+    axis-aligned joints by their 2-column update, others by Rodrigues'
+    ``exp = I + sin(theta) K + (1 - cos(theta)) K^2``.
     """
     n = q.shape[0]
-    R = np.tile(np.eye(3), (n, 1, 1))
-    p = np.zeros((n, 3))
+    qT = q.T[chain["idx"]]
+    cos_q, sin_q = np.cos(qT), np.sin(qT)
+    C = np.zeros((3, 3, n))
+    C[0, 0] = C[1, 1] = C[2, 2] = 1.0
+    p = np.zeros((3, n))
     origins, axes = [], []
     for i in range(len(chain["idx"])):
-        p = p + _rmul(R, chain["p_M"][i])
-        R = _rmul(R, chain["R_M"][i])
-        th = q[:, chain["idx"][i]]
+        p = p + _cmul(chain["p_M"][i], C)
+        if not chain["R_M_is_I"][i]:
+            C = _cmul(chain["R_M"][i], C)
+        c, s = cos_q[i], sin_q[i]
+        k = chain["aligned"][i]
         if with_joints:
             origins.append(p)
-            axes.append(_rmul(R, chain["axis"][i]))
-        s = np.sin(th)[:, None, None]
-        c1 = (1.0 - np.cos(th))[:, None, None]
-        R = R + s * _rmul(R, chain["K"][i]) + c1 * _rmul(R, chain["K2"][i])
-    p = p + _rmul(R, chain["p_f"])
-    R = _rmul(R, chain["R_f"])
+            axes.append(C[k].copy() if k >= 0 else _cmul(chain["axis"][i], C))
+        if k >= 0:  # rotation about column k mixes the two others (in place: C is owned here)
+            u, v = (k + 1) % 3, (k + 2) % 3
+            new_u = c * C[u] + s * C[v]
+            C[v] = c * C[v] - s * C[u]
+            C[u] = new_u
+        else:
+            C = C + s * _cmul(chain["K"][i], C) + (1.0 - c) * _cmul(chain["K2"][i], C)
+    p = p + _cmul(chain["p_f"], C)
+    C = _cmul(chain["R_f"], C)
     if with_joints:
-        return R, p, np.stack(origins, axis=1), np.stack(axes, axis=1)
-    return R, p
+        if not origins:  # frame on the root: no joint moves it
+            return C, p, np.zeros((0, 3, n)), np.zeros((0, 3, n))
+        return C, p, np.stack(origins), np.stack(axes)
+    return C, p
 
 
 def _jacobian_from(chain, nq, p, origins, axes) -> np.ndarray:
-    """LOCAL_WORLD_ALIGNED Jacobian (n, 6, nq) from joint origins/axes and the frame point."""
-    n = p.shape[0]
-    J = np.zeros((n, 6, nq))
-    J[:, :3, chain["idx"]] = _cross(axes, p[:, None, :] - origins).transpose(0, 2, 1)
-    J[:, 3:, chain["idx"]] = axes.transpose(0, 2, 1)
+    """LOCAL_WORLD_ALIGNED Jacobian (6, nq, n) from joint origins/axes (k, 3, n) and the
+    frame point p (3, n)."""
+    J = np.zeros((6, nq, p.shape[1]))
+    J[:3, chain["idx"]] = _cross(axes.transpose(1, 0, 2), p[:, None, :] - origins.transpose(1, 0, 2))
+    J[3:, chain["idx"]] = axes.transpose(1, 0, 2)
     return J
+
+
+def _dls_step(J: np.ndarray, e: np.ndarray, damping: float) -> np.ndarray:
+    """Damped least squares ``J^T (J J^T + damping I)^-1 e`` for J (6, nq, n), e (6, n).
+
+    The 6x6 SPD system is solved by a Cholesky factorisation written over the batch axis
+    (one numpy operation per matrix entry, each over all n rows).
+    """
+    m = J.shape[0]
+    A = np.empty((m, m, J.shape[2]))
+    for a in range(m):
+        for b in range(a + 1):
+            A[a, b] = np.einsum("kn,kn->n", J[a], J[b])
+        A[a, a] += damping
+    L = np.zeros_like(A)
+    for j in range(m):
+        d = A[j, j] - np.einsum("kn,kn->n", L[j, :j], L[j, :j])
+        L[j, j] = np.sqrt(np.maximum(d, 1e-300))
+        for i in range(j + 1, m):
+            L[i, j] = (A[i, j] - np.einsum("kn,kn->n", L[i, :j], L[j, :j])) / L[j, j]
+    y = np.empty_like(e)
+    for i in range(m):
+        y[i] = (e[i] - np.einsum("kn,kn->n", L[i, :i], y[:i])) / L[i, i]
+    x = np.empty_like(e)
+    for i in range(m - 1, -1, -1):
+        x[i] = (y[i] - np.einsum("kn,kn->n", L[i + 1 :, i], x[i + 1 :])) / L[i, i]
+    return np.einsum("akn,an->kn", J, x)
 
 
 def fk(robot, q, frame: str | None = None) -> np.ndarray:
@@ -196,10 +245,10 @@ def fk(robot, q, frame: str | None = None) -> np.ndarray:
     (4, 4) or (n, 4, 4) float
     """
     qa, single = _check_q(robot, q)
-    R, p = _forward(_chain(robot, _check_frame(robot, frame)), qa)
+    C, p = _forward(_chain(robot, _check_frame(robot, frame)), qa)
     T = np.zeros((qa.shape[0], 4, 4))
-    T[:, :3, :3] = R
-    T[:, :3, 3] = p
+    T[:, :3, :3] = C.transpose(2, 1, 0)
+    T[:, :3, 3] = p.T
     T[:, 3, 3] = 1.0
     return T[0] if single else T
 
@@ -218,7 +267,7 @@ def jacobian(robot, q, frame: str | None = None) -> np.ndarray:
     qa, single = _check_q(robot, q)
     chain = _chain(robot, _check_frame(robot, frame))
     _, p, origins, axes = _forward(chain, qa, with_joints=True)
-    J = _jacobian_from(chain, robot.nq, p, origins, axes)
+    J = _jacobian_from(chain, robot.nq, p, origins, axes).transpose(2, 0, 1)
     return J[0] if single else J
 
 
@@ -226,92 +275,68 @@ def jacobian(robot, q, frame: str | None = None) -> np.ndarray:
 # numerical IK (batched damped least squares)
 
 
-def _axis_residual(R, z_target):
-    """Rotation-vector residual turning the current z axis onto ``z_target`` (n,3) and its angle."""
-    z = R[:, :, 2]
+def _axis_residual(C, z_target, k: int = 2):
+    """Rotation vector (3, n) turning the frame's axis ``k`` (z by default) onto ``z_target``
+    (3, n), and its angle."""
+    z = C[k]
     c = _cross(z, z_target)
-    s = np.sqrt(np.einsum("ij,ij->i", c, c))
-    ang = np.arctan2(s, np.einsum("ij,ij->i", z, z_target))
-    axis = np.where(s[:, None] > 1e-12, c / np.maximum(s, 1e-300)[:, None], R[:, :, 0])
-    return axis * ang[:, None], ang
+    s = np.sqrt(np.einsum("in,in->n", c, c))
+    ang = np.arctan2(s, np.einsum("in,in->n", z, z_target))
+    axis = np.where(s > 1e-12, c / np.maximum(s, 1e-300), C[(k + 1) % 3])  # antiparallel: any normal
+    return axis * ang, ang
 
 
-def _pose_residual(R, R_target):
-    """Rotation vector of ``R_target R^T`` (world frame) and its angle, (n,3) and (n,)."""
-    E = R_target @ R.transpose(0, 2, 1)
-    cos = np.clip((E[:, 0, 0] + E[:, 1, 1] + E[:, 2, 2] - 1.0) / 2.0, -1.0, 1.0)
-    w = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
-    sin = 0.5 * np.sqrt(np.einsum("ij,ij->i", w, w))
+def _pose_residual(C, C_target):
+    """Rotation vector (3, n) of ``R_target R^T`` (base frame) and its angle (n,)."""
+    cos = np.clip((np.einsum("jin,jin->n", C_target, C) - 1.0) / 2.0, -1.0, 1.0)
+    # vee(E - E^T) = sum_j R[:, j] x R_target[:, j] = 2 sin(theta) axis
+    w = _cross(C.transpose(1, 0, 2), C_target.transpose(1, 0, 2)).sum(axis=1)
+    sin = 0.5 * np.sqrt(np.einsum("in,in->n", w, w))
     ang = np.arctan2(sin, cos)
     # theta / (2 sin theta), with its series near 0
-    rv = w * np.where(sin > 1e-8, ang / np.maximum(2.0 * sin, 1e-300), 0.5 + ang * ang / 12.0)[:, None]
-    near_pi = cos < -0.99  # axis from the skew part is ill-conditioned there
+    rv = w * np.where(sin > 1e-8, ang / np.maximum(2.0 * sin, 1e-300), 0.5 + ang * ang / 12.0)
+    near_pi = cos < -0.99  # the skew part is ill-conditioned there: axis from the symmetric part
     if near_pi.any():
-        rv[near_pi] = Rotation.from_matrix(E[near_pi]).as_rotvec()
+        # (E + E^T) / 2 - cos I = (1 - cos) a a^T; take its largest-diagonal column
+        E = np.einsum("jkn,jln->nkl", C_target[:, :, near_pi], C[:, :, near_pi])
+        c_pi = cos[near_pi]
+        S = 0.5 * (E + E.transpose(0, 2, 1)) - c_pi[:, None, None] * np.eye(3)
+        k = np.argmax(np.diagonal(S, axis1=1, axis2=2), axis=1)
+        rows = np.arange(k.size)
+        a = S[rows, :, k] / np.sqrt(np.maximum(S[rows, k, k] * (1.0 - c_pi), 1e-300))[:, None]
+        a *= np.where(np.einsum("ni,in->n", a, w[:, near_pi]) < 0.0, -1.0, 1.0)[:, None]
+        rv[:, near_pi] = (a * ang[near_pi, None]).T
     return rv, ang
 
 
+def _seed_box(robot) -> tuple[np.ndarray, np.ndarray]:
+    """Box for random seeds: the joint limits, one turn at most (configurations repeat with
+    period 2 pi, so +-2 pi limits need no wider seeds)."""
+    return np.maximum(robot.q_lower, -np.pi), np.minimum(robot.q_upper, np.pi)
+
+
 def _random_q(robot, rng, n) -> np.ndarray:
-    # +-2 pi limits sample one turn only: configurations repeat with period 2 pi.
-    lo = np.maximum(robot.q_lower, -np.pi)
-    hi = np.minimum(robot.q_upper, np.pi)
+    lo, hi = _seed_box(robot)
     return rng.uniform(lo, hi, size=(n, robot.nq))
 
 
-_STALL_ITERS = 12  # a row whose residual has not dropped by 1 % in this many iterations is stuck
+_STALL_ITERS = 12  # an attempt whose residual has not dropped by 1 % in this many iterations is stuck
+_WIDE_BELOW = 512  # fewer rows than this: the loop is overhead-bound, run restarts side by side
 
 
-def _dls(robot, chain, q, p_t, rot_t, mode, max_iter, pos_tol, rot_tol, damping, max_step):
-    """Newton DLS iterations on all rows of ``q`` at once.
+def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts, pos_tol, rot_tol, damping, max_step,
+                   frame_axis: int = 2):
+    """Batched damped-least-squares Newton iterations with in-loop random restarts.
 
-    Converged rows are frozen; rows stuck in a local minimum or against a joint limit (no 1 %
-    progress in ``_STALL_ITERS`` iterations) are dropped early and left to the restarts.
-    Returns the final ``q`` and the errors at it.
+    Rows (attempts) are iterated together, each row working for one target. Every target starts
+    with one row at ``q0``. An attempt ends when it converges, after ``max_iter`` iterations, or
+    when stuck (no 1 % progress of ``|e_p| + 0.1 |e_r|`` in ``_STALL_ITERS`` iterations: local
+    minimum or joint limit); its target then gets a fresh uniform seed while it has restarts
+    left (``n_restarts`` per target). When fewer than ``_WIDE_BELOW`` rows remain, a target's
+    remaining restarts are started side by side instead of one after the other, which costs
+    almost nothing in that overhead-bound regime and shortens the tail. A target is solved by
+    its first converged row; per target the best attempt is kept.
     """
-    lo, hi = robot.q_lower, robot.q_upper
-    n = q.shape[0]
-    pos_err = np.full(n, np.inf)
-    rot_err = np.full(n, np.inf)
-    best = np.full(n, np.inf)
-    since = np.zeros(n, dtype=int)
-    active = np.arange(n)
-    eye6 = np.eye(6) * damping
-    for it in range(max_iter + 1):
-        qa = q[active]
-        R, p, origins, axes = _forward(chain, qa, with_joints=True)
-        e_p = p_t[active] - p
-        if mode == "axis":
-            e_r, ang = _axis_residual(R, rot_t[active])
-        else:
-            e_r, ang = _pose_residual(R, rot_t[active])
-        pe = np.sqrt(np.einsum("ij,ij->i", e_p, e_p))
-        pos_err[active], rot_err[active] = pe, ang
-        metric = pe + 0.1 * ang
-        improved = metric < 0.99 * best[active]
-        best[active] = np.where(improved, metric, best[active])
-        since[active] = np.where(improved, 0, since[active] + 1)
-        keep = ((pe >= pos_tol) | (ang >= rot_tol)) & (since[active] < _STALL_ITERS)
-        if it == max_iter or not keep.any():
-            break
-        active, qa, R, p, origins, axes = active[keep], qa[keep], R[keep], p[keep], origins[keep], axes[keep]
-        e = np.concatenate([e_p[keep], e_r[keep]], axis=1)
-        J = _jacobian_from(chain, robot.nq, p, origins, axes)
-        if mode == "axis":
-            # The spin about the tool axis is free: project it out of the angular rows.
-            z = R[:, :, 2]
-            P = np.eye(3) - z[:, :, None] * z[:, None, :]
-            J[:, 3:, :] = P @ J[:, 3:, :]
-        JJt = J @ J.transpose(0, 2, 1) + eye6
-        dq = (J.transpose(0, 2, 1) @ np.linalg.solve(JJt, e[:, :, None]))[:, :, 0]
-        step = np.max(np.abs(dq), axis=1)
-        dq *= np.minimum(1.0, max_step / np.maximum(step, 1e-300))[:, None]
-        q[active] = np.clip(qa + dq, lo, hi)
-    return q, pos_err, rot_err
-
-
-def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts, pos_tol, rot_tol, damping, max_step):
-    """First attempt from ``q0``, then restart rounds of 1, 2, 4, ... random seeds per
-    unsolved target, all seeds of a round solved in one batch (fewer, larger batches)."""
     check_int("max_iter", max_iter, 1)
     check_int("n_restarts", n_restarts, 0)
     check_positive("pos_tol", pos_tol)
@@ -320,34 +345,95 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
     check_positive("max_step", max_step)
     rng = np.random.default_rng(0) if rng is None else rng
     chain = _chain(robot, frame)
+    lo, hi = robot.q_lower, robot.q_upper
+    seed_lo, seed_hi = _seed_box(robot)
     n = p_t.shape[0]
-    q, pe, re = _dls(robot, chain, _check_q0(robot, q0, n), p_t, rot_t, mode, max_iter, pos_tol, rot_tol, damping, max_step)
-    ok = (pe < pos_tol) & (re < rot_tol)
-    used, per_target = 0, 1
-    while used < n_restarts and not ok.all():
-        k = min(per_target, n_restarts - used)
-        todo = np.repeat(np.flatnonzero(~ok), k)
-        q_try, pe_try, re_try = _dls(
-            robot, chain, _random_q(robot, rng, todo.size), p_t[todo], rot_t[todo], mode,
-            max_iter, pos_tol, rot_tol, damping, max_step,
-        )
-        # per target keep the attempt with the smallest scaled residual (in seed order)
-        score = pe_try + 0.1 * re_try
-        for j in range(k):
-            rows = slice(j, None, k)
-            tgt = todo[rows]
-            better = score[rows] < pe[tgt] + 0.1 * re[tgt]
-            sel = tgt[better]
-            q[sel], pe[sel], re[sel] = q_try[rows][better], pe_try[rows][better], re_try[rows][better]
-        ok = (pe < pos_tol) & (re < rot_tol)
-        used += k
-        per_target *= 2
-    return IKResult(q=q, success=ok, position_error=pe, rotation_error=re)
+    p_tT = np.ascontiguousarray(p_t.T)
+    rot_tT = np.ascontiguousarray(rot_t.transpose(2, 1, 0) if mode == "pose" else rot_t.T)
+    # per target
+    q_best = _check_q0(robot, q0, n)
+    pe_best = np.full(n, np.inf)
+    re_best = np.full(n, np.inf)
+    best_metric = np.full(n, np.inf)
+    left = np.full(n, n_restarts)
+    solved = np.zeros(n, dtype=bool)
+    # per row
+    rq = q_best.copy()
+    rt = np.arange(n)
+    r_iters = np.zeros(n, dtype=int)
+    r_since = np.zeros(n, dtype=int)
+    r_best = np.full(n, np.inf)
+    wide = False  # True once a target may have several rows
+    while rt.size:
+        C, p, origins, axes = _forward(chain, rq, with_joints=True)
+        e_p = np.take(p_tT, rt, axis=1) - p
+        if mode == "axis":
+            e_r, ang = _axis_residual(C, np.take(rot_tT, rt, axis=1), frame_axis)
+        else:
+            e_r, ang = _pose_residual(C, np.take(rot_tT, rt, axis=2))
+        pe = np.sqrt(np.einsum("in,in->n", e_p, e_p))
+        metric = pe + 0.1 * ang
+        converged = (pe < pos_tol) & (ang < rot_tol)
+        progress = metric < 0.99 * r_best
+        r_best = np.where(progress, metric, r_best)
+        r_since = np.where(progress, 0, r_since + 1)
+        ended = ~converged & ((r_since >= _STALL_ITERS) | (r_iters >= max_iter))
+        # a finished attempt (converged or ended) is recorded if it beats its target's best
+        fin = np.flatnonzero(converged | ended)
+        if fin.size:
+            if wide:  # several rows per target: the best finished row of each
+                fin = fin[np.lexsort((metric[fin], rt[fin]))]
+                fin = fin[np.unique(rt[fin], return_index=True)[1]]
+            t_f = rt[fin]
+            up = metric[fin] < best_metric[t_f]
+            t_up, r_up = t_f[up], fin[up]
+            q_best[t_up], pe_best[t_up], re_best[t_up], best_metric[t_up] = rq[r_up], pe[r_up], ang[r_up], metric[r_up]
+            solved[rt[converged]] = True
+        alive = ~solved[rt]  # drops the sibling rows of solved targets
+        ended &= alive
+        step = alive & ~ended & ~converged
+        # ended rows take a restart of their target while it has some left (in row order)
+        e_rows = np.flatnonzero(ended)
+        e_sorted = e_rows[np.argsort(rt[e_rows], kind="stable")]
+        e_t = rt[e_sorted]
+        t_u, t_first, t_count = np.unique(e_t, return_index=True, return_counts=True)
+        rank = np.arange(e_t.size) - np.repeat(t_first, t_count)
+        reseed_rows = e_sorted[rank < left[e_t]]
+        left[t_u] -= np.minimum(t_count, left[t_u])
+        new_t = [rt[reseed_rows]]
+        n_next = int(step.sum()) + reseed_rows.size
+        waiting = np.flatnonzero(~solved & (left > 0))
+        if 0 < n_next < _WIDE_BELOW and waiting.size:
+            extra = np.minimum(left[waiting], (_WIDE_BELOW - n_next) // waiting.size)
+            new_t.append(np.repeat(waiting, extra))
+            left[waiting] -= extra
+            wide = True
+        new_t = np.concatenate(new_t)
+        q_step = rq[step]
+        if step.any():
+            J = _jacobian_from(chain, robot.nq, p[:, step], origins[:, :, step], axes[:, :, step])
+            if mode == "axis":
+                # The spin about the aligned axis is free: project it out of the angular rows.
+                z = C[frame_axis][:, step]
+                J[3:] -= z[:, None, :] * np.einsum("in,ikn->kn", z, J[3:])[None]
+            e = np.concatenate([e_p[:, step], e_r[:, step]], axis=0)
+            dq = _dls_step(J, e, damping).T
+            big = np.max(np.abs(dq), axis=1)
+            dq *= np.minimum(1.0, max_step / np.maximum(big, 1e-300))[:, None]
+            q_step = np.clip(q_step + dq, lo, hi)
+        m_new = new_t.size
+        rq = np.concatenate([q_step, rng.uniform(seed_lo, seed_hi, size=(m_new, robot.nq))])
+        rt = np.concatenate([rt[step], new_t])
+        r_iters = np.concatenate([r_iters[step] + 1, np.zeros(m_new, dtype=int)])
+        r_since = np.concatenate([r_since[step], np.zeros(m_new, dtype=int)])
+        r_best = np.concatenate([r_best[step], np.full(m_new, np.inf)])
+    ok = (pe_best < pos_tol) & (re_best < rot_tol)
+    return IKResult(q=q_best, success=ok, position_error=pe_best, rotation_error=re_best)
 
 
 def ik(
     robot, base_T_target, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
-    max_iter: int = 50, n_restarts: int = 8, pos_tol: float = 1e-5, rot_tol: float = 1e-4,
+    max_iter: int = 50, n_restarts: int = 12, pos_tol: float = 1e-5, rot_tol: float = 1e-4,
     damping: float = 1e-6, max_step: float = 1.0,
 ) -> IKResult:
     """Full-pose inverse kinematics, batched damped least squares with random restarts.
@@ -365,7 +451,8 @@ def ik(
     max_iter : int
         Newton iterations per attempt.
     n_restarts : int
-        Extra random attempts for the targets not converged yet.
+        Extra random attempts per target (an attempt ends converged, after ``max_iter``
+        iterations, or stalled: no 1 % progress in 12 iterations).
     pos_tol, rot_tol : float (m, rad)
         Convergence tolerances.
     damping : float
@@ -394,8 +481,8 @@ def ik(
 
 def ik_axis(
     robot, positions, axes, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
-    method: str = "auto", max_iter: int = 50, n_restarts: int = 8, pos_tol: float = 1e-5,
-    rot_tol: float = 1e-4, damping: float = 1e-6, max_step: float = 1.0,
+    method: str = "auto", max_iter: int = 50, n_restarts: int = 12, pos_tol: float = 1e-5,
+    rot_tol: float = 1e-4, damping: float = 1e-6, max_step: float = 1.0, frame_axis: int = 2,
 ) -> IKResult:
     """Inverse kinematics for a position and a tool axis (free rotation about the axis).
 
@@ -408,12 +495,18 @@ def ik_axis(
         Target directions of the frame's z axis (normalised here).
     frame : str, default ``robot.tool_frame``
     q0 : (nq,) or (n, nq) float, optional
-        Seed for DLS; for the closed form, the branch nearest to ``q0`` is returned.
+        Seed for DLS; for the closed form, the valid branch nearest to ``q0`` is returned
+        (without ``q0``: the valid branch farthest from the joint limits).
     method : {"auto", "closed_form", "dls"}
         ``"auto"`` uses the closed form when the model has a Puma-type DH table and ``frame``
-        lies on the flange axis, DLS otherwise.
+        lies on the flange axis, DLS otherwise. The closed form enumerates all 8 branches
+        (shoulder, elbow, wrist flip) and sets the free joint 6 to 0.
     max_iter, n_restarts, pos_tol, rot_tol, damping, max_step, rng
         As in :func:`ik` (DLS only; ``pos_tol``/``rot_tol`` also decide closed-form success).
+    frame_axis : {0, 1, 2}
+        Which axis of ``frame`` goes along ``axes`` (default 2 = z, the tool axis). E.g.
+        ``frame="camera", frame_axis=0`` points the MAVAC camera's optical (x) axis. The
+        closed form needs 2.
 
     Returns
     -------
@@ -428,15 +521,21 @@ def ik_axis(
         raise ValueError("axes must be non-zero vectors")
     a = a / norm[:, None]
     frame = _check_frame(robot, frame)
+    check_positive("pos_tol", pos_tol)
+    check_positive("rot_tol", rot_tol)
     if method not in ("auto", "closed_form", "dls"):
         raise ValueError(f"method must be 'auto', 'closed_form' or 'dls', got {method!r}")
-    closed = _closed_form_params(robot, frame)
+    frame_axis = check_int("frame_axis", frame_axis, 0, 2)
+    closed = _closed_form_params(robot, frame) if frame_axis == 2 else None
     if method == "closed_form" and closed is None:
-        raise ValueError(f"method='closed_form' needs a Puma-type DH robot and a flange-axis frame, got {robot.name}/{frame}")
+        raise ValueError(
+            f"method='closed_form' needs a Puma-type DH robot and a flange-axis frame, got {robot.name}/{frame}"
+        )
     if method != "dls" and closed is not None:
         q0a = None if q0 is None else _check_q0(robot, q0, p.shape[0])
         return _puma_ik_axis(closed, robot.q_lower, robot.q_upper, p, a, q0a, pos_tol, rot_tol)
-    return _solve_batched(robot, frame, p, a, "axis", q0, rng, max_iter, n_restarts, pos_tol, rot_tol, damping, max_step)
+    return _solve_batched(robot, frame, p, a, "axis", q0, rng,
+                          max_iter, n_restarts, pos_tol, rot_tol, damping, max_step, frame_axis)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -460,10 +559,9 @@ def _closed_form_params(robot, frame):
     # The frame must keep z6 as its z axis (any spin about it is fine).
     if not np.allclose(chain["R_f"][:, 2], [0.0, 0.0, 1.0]):
         return None
-    return {
-        "d1": d[0], "a2": a[1], "d_off": d[1] + d[2], "a3": a[2], "d4": d[3],
-        "reach": d[5] + chain["p_f"][2],
-    }
+    # "reach": wrist centre (joint 6 origin) to the frame origin along z6 (d6 + tool length,
+    # both in the frame placement on joint 6)
+    return {"d1": d[0], "a2": a[1], "d_off": d[1] + d[2], "a3": a[2], "d4": d[3], "reach": chain["p_f"][2]}
 
 
 def _puma_tool(c, q):
@@ -485,13 +583,13 @@ def _puma_tool(c, q):
     return w + c["reach"] * z, z
 
 
-def _wrap_into(theta, lo: float, hi: float):
+def _wrap_into(theta, lo: float, hi: float, principal: bool = False):
     """Equivalent of ``theta`` (mod 2 pi) with the largest normalised joint-limit margin.
 
     Returns the angle and its margin ``min(t - lo, hi - t) / (hi - lo)`` (< 0 when no
-    equivalent angle lies within [lo, hi]).
+    equivalent angle lies within [lo, hi]). ``principal``: theta is already in [-pi, pi].
     """
-    t = theta - _TWO_PI * np.round(theta / _TWO_PI)
+    t = theta if principal else theta - _TWO_PI * np.round(theta / _TWO_PI)
     span = hi - lo
     m = np.minimum(t - lo, hi - t) / span
     if lo < -np.pi or hi > np.pi:  # a second turn can fall inside the limits
@@ -553,15 +651,16 @@ def _puma_ik_axis(c, lo, hi, p, a, q0, pos_tol, rot_tol):
     b2 = -s23 * u0 + c23 * az
     q5 = np.arctan2(np.hypot(b0, u1), b2)
     q4 = np.arctan2(-u1, -b0)
-    q4 = np.stack([q4, q4 + np.pi], axis=3)  # (n, 2, 2, 2) wrist flip
+    # (n, 2, 2, 2) with the wrist flip (q4 + pi, -q5); all in [-pi, pi]
+    q4 = np.stack([q4, np.where(q4 > 0.0, q4 - np.pi, q4 + np.pi)], axis=3)
     q5 = np.stack([q5, -q5], axis=3)
     q6 = min(max(0.0, lo[5]), hi[5])  # free spin about the tool axis: closest to 0
     # wrap each joint once at its own shape, then score the 8 branches by broadcasting
     q1, m1 = _wrap_into(q1, lo[0], hi[0])
     q2, m2 = _wrap_into(q2, lo[1], hi[1])
     q3, m3 = _wrap_into(q3, lo[2], hi[2])
-    q4, m4 = _wrap_into(q4, lo[3], hi[3])
-    q5, m5 = _wrap_into(q5, lo[4], hi[4])
+    q4, m4 = _wrap_into(q4, lo[3], hi[3], principal=True)
+    q5, m5 = _wrap_into(q5, lo[4], hi[4], principal=True)
     m6 = min(q6 - lo[5], hi[5] - q6) / (hi[5] - lo[5])
     margin = np.minimum(np.minimum(np.minimum(m1[:, :, None, None], m2[:, :, :, None]), m3[:, None, :, None]),
                         np.minimum(np.minimum(m4, m5), m6)).reshape(n, 8)
@@ -649,6 +748,11 @@ def maneuverability(robot, q, k: float | None = None) -> np.ndarray:
     lo, hi = robot.q_lower, robot.q_upper
     prod = np.prod(np.clip((qa - lo) * (hi - qa), 0.0, None) / (hi - lo) ** 2, axis=1)
     jl = 1.0 - np.exp(-k * prod)
-    w_max = robot.manipulability_max or estimate_manipulability_max(robot)
+    w_max = robot.manipulability_max
+    if w_max is None:  # hand-made model: estimate once and keep it with the model's caches
+        hit = robot._cache.get("manipulability_max")
+        if hit is None or hit[0] is not robot.model:
+            hit = robot._cache["manipulability_max"] = (robot.model, estimate_manipulability_max(robot))
+        w_max = hit[1]
     im = np.clip(_manipulability(robot, qa) / w_max, 0.0, 1.0) * jl
     return float(im[0]) if single else im

@@ -77,6 +77,13 @@ class RobotModel:
     manipulability_max : float or None
         Normaliser of the Yoshikawa manipulability at ``tool_frame`` (see
         ``kinematics.maneuverability``), estimated once per model.
+
+    Notes
+    -----
+    A robot made by this module's builders pickles as its builder call (plus ``q_home``) and
+    is rebuilt on unpickling: the UR10 meshes would otherwise weigh ~200 MB per pickle
+    (joblib workers). In-place edits of its pinocchio models are not carried over; build a
+    new ``RobotModel`` (or ``dataclasses.replace``) to get a fully pickled copy.
     """
 
     name: str
@@ -89,7 +96,14 @@ class RobotModel:
     notes: str = ""
     dh: np.ndarray | None = None
     manipulability_max: float | None = None
+    # derived data (kinematic chains...), each entry tied to the pinocchio model it came from
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    _build: tuple | None = field(default=None, init=False, repr=False, compare=False)
+
+    def __reduce_ex__(self, protocol):
+        if self._build is None:
+            return super().__reduce_ex__(protocol)
+        return (_rebuild, (*self._build, np.array(self.q_home)))
 
     @property
     def nq(self) -> int:
@@ -130,10 +144,24 @@ def _add_to_both(collision, visual, geometry):
     visual.addGeometryObject(geometry.copy())
 
 
-def _with_manipulability_max(robot: RobotModel) -> RobotModel:
+_MANIPULABILITY_MAX: dict = {}  # per builder call: the estimate is deterministic
+
+
+def _finish(robot: RobotModel, builder: str, kwargs: dict) -> RobotModel:
+    """Attach the manipulability normaliser (estimated once per process) and the pickling key."""
     from .kinematics import estimate_manipulability_max
 
-    robot.manipulability_max = estimate_manipulability_max(robot)
+    key = (builder, tuple(sorted(kwargs.items())))
+    if key not in _MANIPULABILITY_MAX:
+        _MANIPULABILITY_MAX[key] = estimate_manipulability_max(robot)
+    robot.manipulability_max = _MANIPULABILITY_MAX[key]
+    robot._build = (builder, dict(kwargs))
+    return robot
+
+
+def _rebuild(builder: str, kwargs: dict, q_home: np.ndarray) -> RobotModel:
+    robot = load_robot(builder, **kwargs)
+    robot.q_home = q_home
     return robot
 
 
@@ -156,11 +184,9 @@ def ur10_mobile() -> RobotModel:
     _, visual = pin.appendModel(root, ur.model, empty_v, ur.visual_model, root_frame, base_T_arm)
 
     # The example-robot-data "ee_link" box duplicates the flange; the tool replaces it.
-    for g in ("ee_link_0",):
-        if collision.existGeometryName(g):
-            collision.removeGeometryObject(g)
-        if visual.existGeometryName(g):
-            visual.removeGeometryObject(g)
+    for geometry_model in (collision, visual):
+        if geometry_model.existGeometryName("ee_link_0"):
+            geometry_model.removeGeometryObject("ee_link_0")
 
     box = coal.Box(*MIR200_SIZE)
     _add_to_both(
@@ -184,19 +210,17 @@ def ur10_mobile() -> RobotModel:
     )
     _add_to_both(collision, visual, tube)
     _add_to_both(collision, visual, sphere)
-    model.addFrame(
-        pin.Frame("tool_tip", joint, flange_id, joint_T_flange * _translation(z=TOOL_TUBE_LENGTH), pin.FrameType.OP_FRAME)
-    )
+    joint_T_tip = joint_T_flange * _translation(z=TOOL_TUBE_LENGTH)
+    model.addFrame(pin.Frame("tool_tip", joint, flange_id, joint_T_tip, pin.FrameType.OP_FRAME))
     # Camera on top of the tube (flange +x side), near the flange; camera x = tool z,
     # camera y = tool y, camera z = -tool x (right-handed).
     flange_R_camera = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
     cam_offset = TOOL_TUBE_RADIUS + KINECT_SIZE[2] / 2 + 0.005
     flange_T_camera = pin.SE3(flange_R_camera, np.array([cam_offset, 0.0, 0.06]))
-    model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_flange * flange_T_camera, pin.FrameType.OP_FRAME))
-    _add_to_both(
-        collision, visual,
-        _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_flange * flange_T_camera, (0.1, 0.1, 0.1, 1.0)),
-    )
+    joint_T_camera = joint_T_flange * flange_T_camera
+    model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_camera, pin.FrameType.OP_FRAME))
+    camera_body = _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_camera, (0.1, 0.1, 0.1, 1.0))
+    _add_to_both(collision, visual, camera_body)
 
     # Elbow up, tool tip ~(1.0, 0, 0.8) m pointing forward and 60 deg down, wrist away from
     # q5 = 0 (wrist singularity); a high-maneuverability IK solution for that target.
@@ -215,7 +239,7 @@ def ur10_mobile() -> RobotModel:
             "5 cm sphere on tool0; Azure Kinect on top of the tube, optical axis = camera x = tool z."
         ),
     )
-    return _with_manipulability_max(robot)
+    return _finish(robot, "ur10_mobile", {})
 
 
 def _dh_placement(a: float, d: float, alpha: float) -> pin.SE3:
@@ -261,35 +285,35 @@ def puma560(tool_length: float = 0.0) -> RobotModel:
             parent, pin.JointModelRZ(), placement, f"joint{i + 1}",
             np.full(1, 100.0), np.full(1, 5.0), lower[i : i + 1], upper[i : i + 1],
         )
-        model.appendBodyToJoint(jid, pin.Inertia.FromCylinder(1.0, 0.05, 0.1), pin.SE3.Identity())
         model.addFrame(pin.Frame(f"link{i + 1}", jid, 0, pin.SE3.Identity(), pin.FrameType.BODY))
         joints.append(jid)
         a, d, alpha = PUMA560_DH[i]
         parent, placement = jid, _dh_placement(a, d, alpha)
     flange_frame = model.addFrame(pin.Frame("flange", joints[-1], 0, placement, pin.FrameType.OP_FRAME))
-    model.addFrame(pin.Frame("tool", joints[-1], flange_frame, placement * _translation(z=tool_length), pin.FrameType.OP_FRAME))
+    joint_T_tool = placement * _translation(z=tool_length)
+    model.addFrame(pin.Frame("tool", joints[-1], flange_frame, joint_T_tool, pin.FrameType.OP_FRAME))
 
-    a2, d3, a3, d4 = PUMA560_DH[1, 0], PUMA560_DH[2, 1], PUMA560_DH[2, 0], PUMA560_DH[3, 1]
+    a2, d3, d4 = PUMA560_DH[1, 0], PUMA560_DH[2, 1], PUMA560_DH[3, 1]
     collision, visual = pin.GeometryModel(), pin.GeometryModel()
     grey, orange = (0.7, 0.7, 0.7, 1.0), (0.9, 0.5, 0.1, 1.0)
-    fid = lambda j: model.getFrameId(f"link{j}")  # noqa: E731
+    fid = {j: model.getFrameId(f"link{j}") for j in range(1, 7)}
     parts = [
         # pedestal under the shoulder housing (universe)
         _cylinder_between("pedestal", 0, 0, [0, 0, -PUMA560_PEDESTAL_HEIGHT], [0, 0, -0.25], 0.10, grey),
         # shoulder housing: vertical cylinder around z0 (joint 1 frame)
-        _cylinder_between("link1", joints[0], fid(1), [0, 0, -0.25], [0, 0, 0.10], 0.09, grey),
+        _cylinder_between("link1", joints[0], fid[1], [0, 0, -0.25], [0, 0, 0.10], 0.09, grey),
         # upper arm: from the shoulder to the elbow along x of joint 2, offset towards d3
-        _cylinder_between("link2", joints[1], fid(2), [0, 0, 0.10], [a2, 0, 0.10], 0.06, grey),
+        _cylinder_between("link2", joints[1], fid[2], [0, 0, 0.10], [a2, 0, 0.10], 0.06, grey),
         # elbow housing about the elbow axis (z of joint 3)
-        _cylinder_between("link3", joints[2], fid(3), [0, 0, 0.04], [0, 0, d3 + 0.05], 0.06, grey),
+        _cylinder_between("link3", joints[2], fid[3], [0, 0, 0.04], [0, 0, d3 + 0.05], 0.06, grey),
         # forearm: along z of joint 4 from just past the elbow to before the wrist centre
-        _cylinder_between("link4", joints[3], fid(4), [0, 0, 0.10], [0, 0, d4 - 0.06], 0.045, grey),
+        _cylinder_between("link4", joints[3], fid[4], [0, 0, 0.10], [0, 0, d4 - 0.06], 0.045, grey),
         # wrist: about z of joint 5 through the wrist centre
-        _cylinder_between("link5", joints[4], fid(5), [0, 0, -0.04], [0, 0, 0.04], 0.04, grey),
+        _cylinder_between("link5", joints[4], fid[5], [0, 0, -0.04], [0, 0, 0.04], 0.04, grey),
     ]
     if tool_length > 0.06:
         parts.append(
-            _cylinder_between("tool", joints[5], fid(6), [0, 0, 0.05], [0, 0, tool_length], 0.02, orange)
+            _cylinder_between("tool", joints[5], fid[6], [0, 0, 0.05], [0, 0, tool_length], 0.02, orange)
         )
     for g in parts:
         _add_to_both(collision, visual, g)
@@ -312,7 +336,7 @@ def puma560(tool_length: float = 0.0) -> RobotModel:
         ),
         dh=PUMA560_DH.copy(),
     )
-    return _with_manipulability_max(robot)
+    return _finish(robot, "puma560", {"tool_length": tool_length})
 
 
 def load_robot(name: str, **kwargs) -> RobotModel:
