@@ -191,6 +191,9 @@ class GPRParams:
     # Coarse uniform exploration (Sec. VIII): grid points per axis, cell-centred (2 -> 2^5 =
     # 32 points at 1/4 and 3/4 of each (log) range, plus the centre). Ours.
     grid_points: int = 2
+    # With 2 points per axis run the 2^(5-1) resolution-V half fraction (16 points + centre)
+    # instead of the full 32 (ours; classic fractional factorial screening design).
+    half_fraction: bool = True
     # Experiment budget (exploration included); the run stops there, feasible or not. Ours.
     max_experiments: int = 100
     # Candidate points per iteration (seeded Sobol, plus local ones around the incumbent). Ours.

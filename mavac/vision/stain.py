@@ -1,0 +1,357 @@
+"""Stain perception (Kabir et al., Sec. VII, Figs. 4-5).
+
+* :func:`render_stain_image` -- our stand-in for the camera: an orthographic render of the
+  per-triangle stain intensity over the part colour, with pixel noise (trimesh/embree rays,
+  one batched cast for all pixels). Flat albedo, no lighting.
+* :func:`stain_mask_kmeans` / :func:`stain_masks_kmeans` -- binary stain masks by 2-cluster
+  K-means on RGB pixels (Sec. VII).
+* :func:`cleaning_performance` -- ``C_p = (N_p^- - N_p^+) / (I_h I_w)`` (Sec. VII).
+* :func:`passes_from_image` -- pixelwise vector quantisation into ``N_c`` colours mapped to
+  0..N_c-1 cleaning passes by RGB norm (Fig. 5).
+
+Images are ``(H, W, 3)`` uint8 RGB.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import trimesh
+from sklearn.cluster import KMeans
+from threadpoolctl import ThreadpoolController
+
+from mavac.validate import check_int, check_nonnegative, check_points, check_range
+
+
+@functools.lru_cache(maxsize=1)
+def _threadpools() -> ThreadpoolController:
+    return ThreadpoolController()  # scanning the loaded libraries is slow: do it once
+
+
+def _single_thread():
+    """Context limiting BLAS/OpenMP to one thread (small problems; avoids contention)."""
+    return _threadpools().limit(limits=1)
+
+
+@dataclass(frozen=True)
+class OrthoView:
+    """Orthographic camera: looks along ``direction``; the image is centred on ``center``
+    and spans ``width`` x ``height`` metres (image x along ``right``, rows downward)."""
+
+    direction: tuple
+    center: tuple
+    width: float
+    height: float
+
+    def basis(self):
+        """Unit ``(direction, right, down)`` vectors of the image plane, each (3,)."""
+        d = np.asarray(self.direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        helper = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        right = np.cross(d, helper)
+        right /= np.linalg.norm(right)
+        down = np.cross(d, right)
+        return d, right, down
+
+
+def view_of_faces(mesh: trimesh.Trimesh, faces=None, direction=None, margin: float = 0.05) -> OrthoView:
+    """Orthographic view framing ``faces`` (default all) seen along ``direction``.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+    faces : (k,) int, optional
+        Faces to frame; default every face.
+    direction : (3,) float, optional
+        Viewing direction; default minus the area-weighted mean normal of ``faces`` (the
+        camera faces the stain), falling back to looking down -z.
+    margin : float
+        Relative margin around the projected bounding box.
+    """
+    faces = np.arange(len(mesh.faces)) if faces is None else np.asarray(faces, dtype=int)
+    if faces.size == 0:
+        raise ValueError("faces must select at least one face to frame")
+    if direction is None:
+        mean_normal = (mesh.face_normals[faces] * mesh.area_faces[faces, None]).sum(axis=0)
+        n = np.linalg.norm(mean_normal)
+        direction = -mean_normal / n if n > 1e-9 else np.array([0.0, 0.0, -1.0])
+    direction = check_points("direction", direction, 3)[0]
+    if np.linalg.norm(direction) < 1e-12:
+        raise ValueError("direction must be a non-zero vector")
+    check_nonnegative("margin", margin)
+    probe = OrthoView(tuple(direction), (0.0, 0.0, 0.0), 1.0, 1.0)
+    _, right, down = probe.basis()
+    pts = mesh.vertices[np.unique(mesh.faces[faces])]
+    u, w = pts @ right, pts @ down
+    centre_uw = np.array([u.min() + u.max(), w.min() + w.max()]) / 2
+    centroid = pts.mean(axis=0)
+    centre = centroid + (centre_uw[0] - centroid @ right) * right + (centre_uw[1] - centroid @ down) * down
+    width = max(np.ptp(u), 1e-6) * (1 + 2 * margin)
+    height = max(np.ptp(w), 1e-6) * (1 + 2 * margin)
+    return OrthoView(tuple(direction), tuple(centre), float(width), float(height))
+
+
+def face_index_image(mesh: trimesh.Trimesh, view, image_size=(96, 96)) -> np.ndarray:
+    """Index of the first face hit by each pixel's ray (``-1`` for background).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+    view : OrthoView or (3,) float viewing direction (then the whole mesh is framed)
+    image_size : (int, int)
+        ``(H, W)`` pixels.
+
+    Returns
+    -------
+    (H, W) int
+    """
+    view = view if isinstance(view, OrthoView) else view_of_faces(mesh, direction=view, margin=0.02)
+    H, W = (check_int("image_size", s, 1) for s in image_size)
+    d, right, down = view.basis()
+    center = np.asarray(view.center, dtype=float)
+    # Pixel centres, image aspect follows the pixel grid; square pixels covering the view.
+    pixel = max(view.width / W, view.height / H)
+    cols = (np.arange(W) - (W - 1) / 2) * pixel
+    rows = (np.arange(H) - (H - 1) / 2) * pixel
+    uu, ww = np.meshgrid(cols, rows)
+    back = float(np.ptp(mesh.vertices @ d)) + np.abs((mesh.vertices - center) @ d).max() + 1.0
+    origins = center + uu.reshape(-1, 1) * right + ww.reshape(-1, 1) * down - back * d
+    directions = np.broadcast_to(d, origins.shape)
+    hit = mesh.ray.intersects_first(ray_origins=origins, ray_directions=directions)
+    return np.asarray(hit, dtype=int).reshape(H, W)
+
+
+def _rgb(name: str, colour) -> np.ndarray:
+    c = np.asarray(colour, dtype=float).reshape(-1)
+    if c.shape != (3,) or np.any(c < 0) or np.any(c > 1):
+        raise ValueError(f"{name} must be 3 RGB values in [0, 1], got {colour!r}")
+    return c
+
+
+def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, image_size=(96, 96),
+                       stain_rgb=(0.35, 0.22, 0.12), part_rgb=(0.92, 0.92, 0.88),
+                       noise_std: float = 0.02, rng: np.random.Generator | None = None,
+                       background_rgb=(0.0, 0.0, 0.0), face_index=None) -> np.ndarray:
+    """Orthographic image of a stained part (our camera stand-in).
+
+    Each pixel takes the colour of the first face hit: ``part + s (stain - part)`` for the
+    face's stain intensity ``s`` in [0, 1], plus Gaussian pixel noise.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+    face_stain : (F,) float in [0, 1]
+        Stain intensity per face (0 clean, 1 full stain colour).
+    view : OrthoView or (3,) float viewing direction
+    image_size : (int, int)
+        ``(H, W)`` pixels.
+    stain_rgb, part_rgb, background_rgb : (3,) float in [0, 1]
+    noise_std : float
+        Pixel noise standard deviation, in colour units of [0, 1].
+    rng : numpy.random.Generator, optional
+        Needed when ``noise_std > 0``.
+    face_index : (H, W) int, optional
+        Precomputed :func:`face_index_image` for this view (skips the ray cast).
+
+    Returns
+    -------
+    (H, W, 3) uint8 RGB image.
+    """
+    face_stain = np.asarray(face_stain, dtype=float)
+    if face_stain.shape != (len(mesh.faces),):
+        raise ValueError(f"face_stain must have shape ({len(mesh.faces)},), got {face_stain.shape}")
+    if not np.all((face_stain >= 0) & (face_stain <= 1)):
+        raise ValueError("face_stain must be in [0, 1]")
+    stain_c, part_c, back_c = _rgb("stain_rgb", stain_rgb), _rgb("part_rgb", part_rgb), _rgb("background_rgb", background_rgb)
+    check_nonnegative("noise_std", noise_std)
+    if face_index is None:
+        face_index = face_index_image(mesh, view, image_size)
+    on_part = face_index >= 0
+    s = np.where(on_part, face_stain[np.where(on_part, face_index, 0)], 0.0)
+    colour = part_c + s[..., None] * (stain_c - part_c)
+    colour = np.where(on_part[..., None], colour, back_c)
+    if noise_std > 0:
+        if rng is None:
+            raise ValueError("rng is required when noise_std > 0")
+        colour = colour + rng.normal(0.0, noise_std, colour.shape)
+    return np.clip(np.rint(colour * 255), 0, 255).astype(np.uint8)
+
+
+def _check_image(image) -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] != 3:
+        raise ValueError(f"image must be (H, W, 3) RGB, got shape {image.shape}")
+    return image.astype(np.uint8) if image.dtype != np.uint8 else image
+
+
+def _region(region_mask, shape) -> np.ndarray:
+    if region_mask is None:
+        return np.ones(shape, dtype=bool)
+    region = np.asarray(region_mask, dtype=bool)
+    if region.shape != shape:
+        raise ValueError(f"region_mask must have shape {shape}, got {region.shape}")
+    return region
+
+
+# K-means is fitted on at most this many pixels (seeded subsample), then labels every pixel.
+_MAX_FIT_PIXELS = 2048
+
+
+def _fit_sample(pixels: np.ndarray, seed: int) -> np.ndarray:
+    if len(pixels) <= _MAX_FIT_PIXELS:
+        return pixels
+    pick = np.random.default_rng(seed).choice(len(pixels), _MAX_FIT_PIXELS, replace=False)
+    return pixels[pick]
+
+
+def _fill_outside(image: np.ndarray, region: np.ndarray) -> np.ndarray:
+    """Paint pixels outside ``region`` with the region's median colour, so filtering does
+    not bleed the background into the part's border pixels."""
+    if region.all() or not region.any():
+        return image
+    out = image.copy()
+    out[~region] = np.median(image[region], axis=0).astype(np.uint8)
+    return out
+
+
+def stain_masks_kmeans(images, seed: int = 0, region_mask=None, light_stain: bool = False,
+                       part_rgb=None, min_contrast: float = 0.08, denoise: bool = True) -> list:
+    """Binary stain masks of several images of the same part with ONE 2-cluster K-means.
+
+    The paper clusters each image into two colours (Sec. VII). Fitting the clusters on the
+    before and after images together gives both the same threshold; with a fully cleaned
+    part a per-image 2-cluster split would otherwise cut the noise of the clean colour in two.
+
+    Parameters
+    ----------
+    images : sequence of (H, W, 3) uint8
+    seed : int
+        K-means seed.
+    region_mask : (H, W) bool, optional
+        Pixels that belong to the part (clustered); others are never stain.
+    light_stain : bool
+        Stain lighter than the part (the stain cluster is then the brighter one).
+    part_rgb : (3,) float in [0, 1], optional
+        Known clean part colour: the stain cluster is the one farther from it. Without it,
+        the stain is the darker cluster (brighter with ``light_stain``).
+    min_contrast : float
+        Minimum distance between the two cluster colours (in [0, 1] colour units, per
+        sqrt(3)) for a stain to be declared at all; below it every mask is empty.
+    denoise : bool
+        3x3 median filter before clustering (OpenCV) against pixel noise.
+
+    Returns
+    -------
+    list of (H, W) bool
+    """
+    images = [_check_image(im) for im in images]
+    if not images:
+        raise ValueError("images must contain at least one image")
+    shape = images[0].shape[:2]
+    if any(im.shape[:2] != shape for im in images):
+        raise ValueError("images must all have the same size")
+    check_int("seed", seed, 0)
+    check_range("min_contrast", min_contrast, 0.0, 1.0)
+    region = _region(region_mask, shape)
+    if denoise:
+        images = [cv2.medianBlur(_fill_outside(im, region), 3) for im in images]
+    pixels = np.concatenate([im[region].reshape(-1, 3) for im in images]).astype(float) / 255.0
+    masks = [np.zeros(shape, dtype=bool) for _ in images]
+    if len(pixels) < 2 or np.ptp(pixels, axis=0).max() == 0:
+        return masks
+    with _single_thread():  # small problem: threads only add contention
+        km = KMeans(n_clusters=2, n_init=1, random_state=seed).fit(_fit_sample(pixels, seed))
+        labels = km.predict(pixels)
+    centres = km.cluster_centers_
+    if np.linalg.norm(centres[0] - centres[1]) / np.sqrt(3) < min_contrast:
+        return masks
+    if part_rgb is not None:
+        stain_cluster = int(np.argmax(np.linalg.norm(centres - _rgb("part_rgb", part_rgb), axis=1)))
+    else:
+        norms = np.linalg.norm(centres, axis=1)
+        stain_cluster = int(np.argmax(norms) if light_stain else np.argmin(norms))
+    labels = labels == stain_cluster
+    start = 0
+    for mask in masks:
+        n = int(region.sum())
+        mask[region] = labels[start:start + n]
+        start += n
+    return masks
+
+
+def stain_mask_kmeans(image, seed: int = 0, region_mask=None, light_stain: bool = False,
+                      part_rgb=None, min_contrast: float = 0.08, denoise: bool = True) -> np.ndarray:
+    """Binary stain mask of one image by 2-cluster K-means on RGB (Kabir, Sec. VII, Fig. 4).
+
+    See :func:`stain_masks_kmeans` for the parameters. Returns ``(H, W)`` bool (True = stain).
+    """
+    return stain_masks_kmeans([image], seed, region_mask, light_stain, part_rgb, min_contrast, denoise)[0]
+
+
+def cleaning_performance(mask_before, mask_after, region_mask=None) -> float:
+    """Cleaning performance of one pass, ``C_p = (N_p^- - N_p^+) / (I_h I_w)`` (Sec. VII).
+
+    Parameters
+    ----------
+    mask_before, mask_after : (H, W) bool
+        Stain pixels (the paper's black pixels) before and after the pass.
+    region_mask : (H, W) bool, optional
+        Target region; its pixel count is ``I_h x I_w`` (default: the whole image).
+
+    Returns
+    -------
+    float -- in [-1, 1]; 0 when there is no stain (or an empty region).
+    """
+    before = np.asarray(mask_before, dtype=bool)
+    after = np.asarray(mask_after, dtype=bool)
+    if before.shape != after.shape or before.ndim != 2:
+        raise ValueError(f"mask_before and mask_after must be (H, W) of the same shape, "
+                         f"got {before.shape} and {after.shape}")
+    region = _region(region_mask, before.shape)
+    area = int(region.sum())
+    if area == 0:
+        return 0.0
+    return float((int(before[region].sum()) - int(after[region].sum())) / area)
+
+
+def passes_from_image(image, n_clusters: int = 4, seed: int = 0, light_stain: bool = False,
+                      region_mask=None) -> np.ndarray:
+    """Cleaning passes per pixel by colour quantisation (Kabir, Sec. VII, Fig. 5).
+
+    K-means quantises the pixel colours into ``n_clusters`` (the paper's N_c); clusters are
+    ranked by the norm of their RGB colour: the largest norm needs 0 passes, the smallest
+    ``n_clusters - 1``. With ``light_stain`` (light stain on a dark part) the order flips.
+
+    Parameters
+    ----------
+    image : (H, W, 3) uint8
+    n_clusters : int >= 2
+    seed : int
+    light_stain : bool
+    region_mask : (H, W) bool, optional
+        Pixels to classify; others get -1.
+
+    Returns
+    -------
+    (H, W) int -- passes in 0..n_clusters-1, -1 outside ``region_mask``.
+    """
+    image = _check_image(image)
+    n_clusters = check_int("n_clusters", n_clusters, 2, 16)
+    check_int("seed", seed, 0)
+    region = _region(region_mask, image.shape[:2])
+    pixels = image[region].reshape(-1, 3).astype(float) / 255.0
+    if len(np.unique(pixels, axis=0)) < n_clusters:
+        raise ValueError(f"n_clusters = {n_clusters} exceeds the number of distinct colours in the image")
+    with _single_thread():
+        km = KMeans(n_clusters=n_clusters, n_init=2, random_state=seed).fit(_fit_sample(pixels, seed))
+        labels = km.predict(pixels)
+    norms = np.linalg.norm(km.cluster_centers_, axis=1)
+    order = np.argsort(norms) if light_stain else np.argsort(-norms)
+    passes_of_cluster = np.empty(n_clusters, dtype=int)
+    passes_of_cluster[order] = np.arange(n_clusters)
+    out = np.full(image.shape[:2], -1, dtype=int)
+    out[region] = passes_of_cluster[labels]
+    return out

@@ -1,0 +1,119 @@
+"""SIMULATED scrubbing black box (stands in for Kabir's physical experiments)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import trimesh
+
+from mavac.params import LissajousParams, ScrubModel
+from mavac.sim.scrub import (ScrubExperiment, lissajous_from_vector, measure_cp, removal_depth,
+                             removal_from_vector, scrub_faces, stain_hardness, stain_opacity,
+                             vector_from_lissajous)
+
+
+@pytest.fixture(scope="module")
+def stained_sphere():
+    mesh = trimesh.creation.icosphere(subdivisions=3, radius=0.1)
+    rng = np.random.default_rng(0)
+    stain = np.zeros(len(mesh.faces))
+    cap = mesh.triangles_center[:, 2] > 0.04
+    stain[cap] = rng.uniform(0.1, 1.0, cap.sum())
+    return mesh, stain, stain_hardness(len(stain), rng)
+
+
+def _x(**changes):
+    return vector_from_lissajous(dataclasses.replace(LissajousParams(), **changes))
+
+
+def test_vector_round_trip():
+    p = LissajousParams()
+    q = lissajous_from_vector(vector_from_lissajous(p), p)
+    assert q == p
+    assert lissajous_from_vector([0.2, 5, 3000, 4, 12]).A_y == 12 and lissajous_from_vector([0.2, 5, 3000, 4, 12]).kappa_y == 3000
+
+
+def test_faster_travel_removes_less():
+    W = removal_from_vector(np.array([_x(v=v) for v in (0.1, 0.2, 0.4, 0.8)]))
+    assert np.all(np.diff(W) < 0)
+
+
+def test_friction_sticks_the_oscillation():
+    # Below mu f_n the tool does not slide: amplitude and frequency no longer matter.
+    f_n = 20.0
+    small = [ _x(f_n=f_n, A_x=a, f_x=f) for a in (1.0, 4.0) for f in (2.0, 9.0)]
+    W = removal_from_vector(np.array(small), ScrubModel(tipping_ratio=1e3))
+    assert np.allclose(W, W[0])
+    assert removal_depth(dataclasses.replace(LissajousParams(), f_n=f_n, A_x=30.0)) > W[0]
+
+
+def test_resonance_and_interior_force_optimum():
+    model = ScrubModel()
+    kappa = 5000.0
+    f_r = np.sqrt(kappa / model.mass) / (2 * np.pi)
+    W = removal_from_vector(np.array([_x(kappa_x=kappa, f_x=f) for f in (f_r / 3, f_r, 3 * f_r)]))
+    assert W[1] > W[0] and W[1] > W[2]
+    forces = np.linspace(1.0, 60.0, 60)
+    Wf = removal_from_vector(np.array([_x(f_n=f) for f in forces]))
+    k = int(np.argmax(Wf))
+    assert 0 < k < len(forces) - 1  # pushing harder is not always better
+
+
+def test_scrub_faces_noise_free_and_deterministic(stained_sphere):
+    _, stain, hardness = stained_sphere
+    p = LissajousParams()
+    W = removal_depth(p)
+    np.testing.assert_allclose(scrub_faces(stain, p, hardness), np.clip(stain - W / hardness, 0, 1))
+    a = scrub_faces(stain, p, hardness, np.random.default_rng(5))
+    b = scrub_faces(stain, p, hardness, np.random.default_rng(5))
+    assert np.array_equal(a, b)
+    assert np.all(a <= stain) and np.all(a[stain == 0] == 0)
+
+
+def test_opacity_endpoints():
+    assert stain_opacity(0.0) == 0.0 and stain_opacity(1.0) == pytest.approx(1.0)
+    assert np.all(np.diff(stain_opacity(np.linspace(0, 1, 11))) > 0)
+
+
+def test_measure_cp_through_images(stained_sphere):
+    mesh, stain, hardness = stained_sphere
+    assert measure_cp(mesh, np.zeros_like(stain), LissajousParams(), np.random.default_rng(0)) == 0.0
+    weak = measure_cp(mesh, stain, LissajousParams(v=1.0, f_n=1.0, A_x=0.0, A_y=0.0), None, hardness,
+                      image_size=(48, 48))
+    strong = measure_cp(mesh, stain, LissajousParams(v=0.05, f_n=20.0), None, hardness, image_size=(48, 48))
+    assert weak < 0.05 and strong > 0.8
+    r1 = measure_cp(mesh, stain, LissajousParams(), np.random.default_rng(9), hardness, image_size=(48, 48))
+    r2 = measure_cp(mesh, stain, LissajousParams(), np.random.default_rng(9), hardness, image_size=(48, 48))
+    assert r1 == r2
+
+
+def test_experiment_mean_matches_noise_free_measurement(stained_sphere):
+    mesh, stain, hardness = stained_sphere
+    ex = ScrubExperiment(mesh, stain, hardness, image_size=(48, 48), table_points=64)
+    X = np.array([_x(v=v, f_n=f) for v, f in ((0.3, 10.0), (0.1, 15.0), (0.6, 5.0))])
+    direct = [ex(x, None) for x in X]
+    np.testing.assert_allclose(ex.mean(X), direct, atol=0.03)
+    noisy = [ex(X[0], np.random.default_rng(s)) for s in range(5)]
+    assert np.std(noisy) > 0 and abs(np.mean(noisy) - direct[0]) < 0.05
+
+
+def test_bad_inputs(stained_sphere):
+    mesh, stain, hardness = stained_sphere
+    p = LissajousParams()
+    with pytest.raises(ValueError, match="face_stain"):
+        scrub_faces(stain * 3, p)
+    with pytest.raises(ValueError, match="hardness"):
+        scrub_faces(stain, p, -hardness)
+    with pytest.raises(ValueError, match="X"):
+        removal_from_vector(np.ones((2, 4)))
+    with pytest.raises(ValueError, match="kappa"):
+        removal_from_vector(np.array([[0.3, 10, 0.0, 6, 30]]))
+    with pytest.raises(ValueError, match="x"):
+        lissajous_from_vector(np.ones((2, 5)))
+    with pytest.raises(ValueError, match="face_stain"):
+        ScrubExperiment(mesh, np.zeros_like(stain), hardness)
+    for field in ("preston", "mass", "friction", "optical_depth", "foam_force"):
+        with pytest.raises(ValueError, match=field):
+            ScrubModel(**{field: 0.0})
+    with pytest.raises(ValueError, match="face_noise"):
+        ScrubModel(face_noise=-0.1)
