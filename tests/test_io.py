@@ -27,3 +27,8 @@ def test_interrupted_write_keeps_previous_version(tmp_path):
             tmp.write_text("{broken")
             raise RuntimeError
     assert target.read_text() == '{\n  "v": 1\n}'
+
+
+def test_written_files_get_normal_permissions(tmp_path):
+    path = write_json({"v": 1}, tmp_path / "p.json")
+    assert path.stat().st_mode & 0o644 == 0o644

@@ -1,0 +1,180 @@
+"""plan_inspection end to end on a small box machine, determinism, empty plans, bad input."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+import trimesh
+
+from mavac.mobile.plan import plan_from_context, plan_inspection, prepare_offline, short_open_path
+from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams)
+
+FAST = InspectionParams(
+    surface_spacing=0.1,
+    reach=ReachabilityMapParams(voxel_size=0.1, n_directions=26, n_samples=20_000, n_rotations=32),
+    spot=SpotParams(ring_spacing=0.6),
+    guard=GuardParams(guard_spacing=0.2),
+    nos=NoSParams(n_rays=200, rrt_time_limit=1.0),
+)
+
+
+def _box_machine():
+    """A 1.2 x 0.8 x 0.9 m box with an open-top pocket (a concavity for NoS)."""
+    from mavac.geometry.machines import machine_from_mesh
+
+    box = trimesh.creation.box(bounds=[[-0.6, -0.4, 0.0], [0.6, 0.4, 0.9]])
+    pocket = trimesh.creation.box(bounds=[[-0.3, -0.2, 0.5], [0.3, 0.2, 1.0]])
+    return machine_from_mesh(trimesh.boolean.difference([box, pocket], engine="manifold"), name="pocket_box")
+
+
+@pytest.fixture(scope="module")
+def robot():
+    from mavac.robots.models import ur10_mobile
+
+    return ur10_mobile()
+
+
+@pytest.fixture(scope="module")
+def ctx(robot):
+    return prepare_offline(_box_machine(), robot=robot, params=FAST)
+
+
+@pytest.fixture(scope="module")
+def plan(ctx):
+    return plan_from_context(ctx)
+
+
+def test_plan_end_to_end(plan, robot):
+    from mavac.mobile.spots import se2_matrices
+    from mavac.mobile.reachability import optical_to_camera, with_optical_frame, OPTICAL_FRAME
+    from mavac.robots.kinematics import fk
+
+    assert plan.n_spots >= 1 and plan.n_guards >= 1
+    assert 0.0 < plan.C <= 1.0 and 0.0 <= plan.O <= plan.C
+    h, n = plan.visible.shape
+    assert h == len(plan.poses) == plan.n_guards + plan.n_nos_guards and n == len(plan.points)
+    # each pose row = its spot + a configuration whose camera is the stored camera pose
+    assert np.allclose(plan.poses[:, :3], plan.spots[plan.pose_spot])
+    ro = with_optical_frame(robot)
+    T = se2_matrices(plan.poses[:, :3]) @ fk(ro, plan.poses[:, 3:], OPTICAL_FRAME)
+    assert np.allclose(optical_to_camera(T), plan.world_T_camera, atol=1e-9)
+    # a regular guard's camera sits L_d out along its target's normal, looking back at it
+    g = np.flatnonzero(plan.pose_kind == "guard")
+    tgt = plan.pose_target[g]
+    L = plan.params.camera.L_d
+    assert np.allclose(plan.world_T_camera[g, :3, 3], plan.points[tgt] + L * plan.normals[tgt], atol=1e-4)
+    assert np.allclose(plan.world_T_camera[g, :3, 0], -plan.normals[tgt], atol=1e-3)
+    # guards of a spot are contiguous in T, spots in tour order
+    assert np.all(np.diff(plan.pose_spot) >= 0)
+    assert np.all((plan.maneuverability >= 0) & (plan.maneuverability <= 1))
+
+
+def test_guard_configurations_are_collision_free(plan, ctx):
+    from mavac.mobile.spots import se2_matrices
+
+    for k, T in enumerate(se2_matrices(plan.spots)):
+        ctx.checker.set_base(T)
+        q = plan.poses[plan.pose_spot == k, 3:]
+        if len(q):
+            assert not np.any(ctx.checker.in_collision(q))
+
+
+def test_nos_attempts_are_reported(plan):
+    for a in plan.nos_attempts:
+        assert a["solved"] <= a["ik"]
+    assert plan.n_nos_guards == sum(a["solved"] for a in plan.nos_attempts)
+    # NoS guards only add coverage
+    assert plan.C >= plan.C_guards
+
+
+def test_json_export_round_trip(plan, tmp_path):
+    path = plan.to_json(tmp_path / "plan.json")
+    data = json.loads(path.read_text())
+    assert data["machine"] == "pocket_box"
+    assert len(data["poses"]) == len(plan.poses)
+    assert np.allclose([p["q"] for p in data["poses"]], plan.poses[:, 3:])
+    assert np.allclose([p["base"] for p in data["poses"]], plan.poses[:, :3])
+    assert data["C"] == pytest.approx(plan.C)
+    assert data["params"]["guard"]["P_g"] == plan.params.guard.P_g
+
+
+def test_same_seed_same_plan(ctx, plan, robot):
+    again = plan_inspection(_box_machine(), robot=robot, params=FAST)
+    assert np.array_equal(again.poses, plan.poses)
+    assert again.C == plan.C and again.O == plan.O
+    assert np.array_equal(again.visible, plan.visible)
+
+
+def test_P_g_sweep_on_a_context_changes_only_guards(ctx):
+    lo = plan_from_context(ctx, dataclasses.replace(ctx.params, guard=dataclasses.replace(ctx.params.guard, P_g=0.0)))
+    hi = plan_from_context(ctx, dataclasses.replace(ctx.params, guard=dataclasses.replace(ctx.params.guard, P_g=0.9)))
+    assert np.array_equal(lo.spots, hi.spots)
+    assert lo.n_guards >= hi.n_guards
+    assert lo.C_guards >= hi.C_guards
+
+
+def test_unreachable_machine_gives_empty_plan(robot):
+    from mavac.geometry.machines import Machine
+
+    m = _box_machine()
+    # a keep-out zone 6 m around the machine: no base pose comes within the arm's reach
+    fence = np.array([[-6.0, -6.0], [6.0, -6.0], [6.0, 6.0], [-6.0, 6.0]])
+    far = Machine("fenced", m.mesh, fence)
+    with pytest.warns(UserWarning, match="empty plan"):
+        plan = plan_inspection(far, robot=robot, params=FAST)
+    assert plan.n_spots == 0 and len(plan.poses) == 0
+    assert plan.C == 0.0 and plan.O == 0.0
+    assert plan.visible.shape == (0, len(plan.points))
+    assert plan.warnings
+
+
+def test_short_open_path():
+    x = np.array([0.0, 5.0, 1.0, 3.0, 2.0, 4.0])
+    d = np.abs(x[:, None] - x[None])
+    order = short_open_path(d, 0)
+    assert x[order].tolist() == sorted(x.tolist())
+    rng = np.random.default_rng(0)
+    pts = rng.uniform(0, 1, (9, 2))
+    d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
+    order = short_open_path(d, 3)
+    assert order[0] == 3 and sorted(order.tolist()) == list(range(9))
+    assert short_open_path(np.zeros((0, 0))).size == 0
+
+
+def test_bad_input(ctx):
+    with pytest.raises(ValueError, match="mesh_or_machine"):
+        plan_inspection("test_bench")
+    with pytest.raises(ValueError, match="params"):
+        plan_inspection(_box_machine(), params=SpotParams())
+    with pytest.raises(ValueError, match="context"):
+        plan_from_context(ctx, dataclasses.replace(ctx.params, surface_spacing=0.2))
+    with pytest.raises(ValueError, match="start"):
+        short_open_path(np.zeros((2, 2)), 5)
+
+
+@pytest.mark.parametrize("cls,kw,name", [
+    (SpotParams, dict(P_s=1.2), "P_s"), (SpotParams, dict(P_s=-0.01), "P_s"),
+    (GuardParams, dict(P_g=1.5), "P_g"), (GuardParams, dict(P_g=-0.5), "P_g"),
+    (GuardParams, dict(k1=1.1), "k1"), (GuardParams, dict(k1=-0.1), "k1"),
+    (GuardParams, dict(k2=2.0), "k2"), (GuardParams, dict(k2=-1.0), "k2"),
+    (GuardParams, dict(visibility="exact"), "visibility"), (GuardParams, dict(hpr_input="all"), "hpr_input"),
+    (GuardParams, dict(guard_spacing=0.0), "guard_spacing"),
+    (SpotParams, dict(ring_distances=()), "ring_distances"), (SpotParams, dict(ring_distances=(-1.0,)), "ring_distances"),
+    (SpotParams, dict(visibility="x"), "visibility"), (SpotParams, dict(view_heights=(0.0,)), "view_heights"),
+    (NoSParams, dict(eps_factor=0.0), "eps_factor"), (NoSParams, dict(n_rays=2), "n_rays"),
+    (NoSParams, dict(rrt_time_limit=0.0), "rrt_time_limit"), (NoSParams, dict(max_ray_tries=0), "max_ray_tries"),
+    (InspectionParams, dict(surface_spacing=-0.1), "surface_spacing"), (InspectionParams, dict(spot=0.02), "spot"),
+])
+def test_parameter_validation(cls, kw, name):
+    with pytest.raises(ValueError, match=name):
+        cls(**kw)
+
+
+def test_camera_validation_reaches_inspection_params():
+    from mavac.params import CameraParams
+
+    with pytest.raises(ValueError, match="L_d"):
+        InspectionParams(camera=CameraParams(L_d=0.0))
+    with pytest.raises(ValueError, match="theta_a"):
+        CameraParams(theta_a=2.0)
