@@ -15,7 +15,7 @@ FAST = InspectionParams(
     reach=ReachabilityMapParams(voxel_size=0.1, n_directions=26, n_samples=20_000, n_rotations=32),
     spot=SpotParams(ring_spacing=0.6),
     guard=GuardParams(guard_spacing=0.2),
-    nos=NoSParams(n_rays=200, rrt_time_limit=1.0),
+    nos=NoSParams(n_rays=200, rrt_max_iterations=5_000),
 )
 
 
@@ -45,9 +45,20 @@ def plan(ctx):
     return plan_from_context(ctx)
 
 
+def test_context_keeps_the_callers_robot(ctx, robot):
+    # no modified copy of the pinocchio model: workers pickle the robot by name
+    assert ctx.robot is robot
+
+
+def test_robot_without_camera_is_refused():
+    from mavac.robots.models import puma560
+
+    with pytest.raises(ValueError, match="camera_frame"):
+        prepare_offline(_box_machine(), robot=puma560(), params=FAST)
+
+
 def test_plan_end_to_end(plan, robot):
     from mavac.mobile.spots import se2_matrices
-    from mavac.mobile.reachability import optical_to_camera, with_optical_frame, OPTICAL_FRAME
     from mavac.robots.kinematics import fk
 
     assert plan.n_spots >= 1 and plan.n_guards >= 1
@@ -56,9 +67,8 @@ def test_plan_end_to_end(plan, robot):
     assert h == len(plan.poses) == plan.n_guards + plan.n_nos_guards and n == len(plan.points)
     # each pose row = its spot + a configuration whose camera is the stored camera pose
     assert np.allclose(plan.poses[:, :3], plan.spots[plan.pose_spot])
-    ro = with_optical_frame(robot)
-    T = se2_matrices(plan.poses[:, :3]) @ fk(ro, plan.poses[:, 3:], OPTICAL_FRAME)
-    assert np.allclose(optical_to_camera(T), plan.world_T_camera, atol=1e-9)
+    T = se2_matrices(plan.poses[:, :3]) @ fk(robot, plan.poses[:, 3:], robot.camera_frame)
+    assert np.allclose(T, plan.world_T_camera, atol=1e-9)
     # a regular guard's camera sits L_d out along its target's normal, looking back at it
     g = np.flatnonzero(plan.pose_kind == "guard")
     tgt = plan.pose_target[g]
@@ -164,6 +174,7 @@ def test_bad_input(ctx):
     (SpotParams, dict(visibility="x"), "visibility"), (SpotParams, dict(view_heights=(0.0,)), "view_heights"),
     (NoSParams, dict(eps_factor=0.0), "eps_factor"), (NoSParams, dict(n_rays=2), "n_rays"),
     (NoSParams, dict(rrt_time_limit=0.0), "rrt_time_limit"), (NoSParams, dict(max_ray_tries=0), "max_ray_tries"),
+    (NoSParams, dict(rrt_max_iterations=0), "rrt_max_iterations"),
     (InspectionParams, dict(surface_spacing=-0.1), "surface_spacing"), (InspectionParams, dict(spot=0.02), "spot"),
 ])
 def test_parameter_validation(cls, kw, name):

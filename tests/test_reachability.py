@@ -31,14 +31,13 @@ def test_index_in_unit_interval(rmap):
 def test_reachable_cells_agree_with_ik(robot, rmap):
     from mavac.robots.kinematics import ik_axis
 
-    ro = R.with_optical_frame(robot)
     rng = np.random.default_rng(0)
     cells = np.argwhere(rmap.reachable)
     pick = cells[rng.choice(len(cells), 150, replace=False)]
     centres = rmap.voxel_centres()[pick[:, 0], pick[:, 1], pick[:, 2]]
     axes = rmap.directions[pick[:, 3]]
     assert np.all(rmap.is_reachable(centres, axes))
-    res = ik_axis(ro, centres, axes, frame=R.OPTICAL_FRAME, rng=rng)
+    res = ik_axis(robot, centres, axes, frame=robot.camera_frame, frame_axis=R.OPTICAL_AXIS, rng=rng)
     assert res.success.mean() > 0.85
 
 
@@ -76,26 +75,22 @@ def test_direction_bins_are_nearest_directions():
 def test_cached_on_disk(robot):
     from mavac import cache
 
-    key = R.robot_fingerprint(R.with_optical_frame(robot), R.OPTICAL_FRAME)
+    key = R.robot_fingerprint(robot, robot.camera_frame)
     tiny = ReachabilityMapParams(voxel_size=0.2, n_directions=8, n_samples=500, n_rotations=4, seed=5)
     a = R.reachability_map(robot, tiny)
     fn = cache.memory().cache(R._build, ignore=["robot"])
-    assert fn.check_call_in_cache(None, key, R.OPTICAL_FRAME, tiny, 2)
+    assert fn.check_call_in_cache(None, key, robot.camera_frame, tiny, R.OPTICAL_AXIS)
     b = R.reachability_map(robot, tiny)
     assert np.array_equal(a.reachable, b.reachable)
 
 
-def test_optical_frame_is_camera_x(robot):
-    from mavac.robots.kinematics import fk
-
-    ro = R.with_optical_frame(robot)
-    q = np.random.default_rng(0).uniform(-3, 3, (5, robot.nq))
-    Tc = fk(ro, q, robot.camera_frame)
-    To = fk(ro, q, R.OPTICAL_FRAME)
-    assert np.allclose(Tc[:, :3, 0], To[:, :3, 2])
-    assert np.allclose(Tc[:, :3, 3], To[:, :3, 3])
-    assert np.allclose(R.optical_to_camera(To), Tc)
-    assert not robot.model.existFrame(R.OPTICAL_FRAME)  # the caller's robot is untouched
+def test_default_map_is_the_camera_optical_axis(robot, rmap):
+    explicit = R.reachability_map(robot, SMALL, frame=robot.camera_frame, axis_column=R.OPTICAL_AXIS, cache=False)
+    assert rmap.frame == robot.camera_frame
+    assert np.array_equal(rmap.reachable, explicit.reachable)
+    # the tool z axis is not the camera x axis: a different map
+    tool = R.reachability_map(robot, SMALL, frame=robot.tool_frame, cache=False)
+    assert tool.reachable.shape != rmap.reachable.shape or not np.array_equal(tool.reachable, rmap.reachable)
 
 
 def test_bad_parameters(robot):

@@ -54,6 +54,41 @@ def test_free_space_path_is_simplified_to_a_straight_line():
     np.testing.assert_allclose(off_line, 0.0, atol=1e-9)
 
 
+def test_iteration_budget_gives_the_same_path_as_an_unbounded_search():
+    # The budget only decides when to stop: a budget large enough to solve gives the same
+    # path as a (practically) unbounded one, and repeated calls agree bit for bit.
+    unbounded = plan_rrt_connect(outside_disc, START, GOAL, LOWER, UPPER, seed=7, time_limit=60.0,
+                                 max_iterations=10**9)
+    budget = next(k for k in (2**i for i in range(20))
+                  if plan_rrt_connect(outside_disc, START, GOAL, LOWER, UPPER, seed=7, time_limit=60.0,
+                                      max_iterations=k).solved)
+    a = plan_rrt_connect(outside_disc, START, GOAL, LOWER, UPPER, seed=7, time_limit=60.0, max_iterations=budget)
+    b = plan_rrt_connect(outside_disc, START, GOAL, LOWER, UPPER, seed=7, time_limit=60.0, max_iterations=budget)
+    assert unbounded.solved and a.solved and b.solved
+    np.testing.assert_array_equal(a.path, b.path)
+    np.testing.assert_array_equal(a.path, unbounded.path)
+
+
+def test_exhausted_iteration_budget_is_unsolved_with_a_reason():
+    def ring_free(q):  # the centre is enclosed by an invalid ring: never solvable
+        return not (0.2 < np.linalg.norm(q - CENTRE) < 0.3)
+
+    calls = []
+
+    def counting(q):
+        calls.append(1)
+        return ring_free(q)
+
+    # A generous time cap: the iteration budget, not the clock, stops the search.
+    res = plan_rrt_connect(counting, CENTRE, [0.95, 0.5], LOWER, UPPER, time_limit=600.0, max_iterations=200)
+    assert (res.solved, res.path, res.reason) == (False, None, "iteration budget exhausted")
+    n_checks = len(calls)
+    calls.clear()
+    again = plan_rrt_connect(counting, CENTRE, [0.95, 0.5], LOWER, UPPER, time_limit=600.0, max_iterations=200)
+    assert again.reason == "iteration budget exhausted"
+    assert len(calls) == n_checks  # the same search, state for state
+
+
 def test_invalid_start_or_goal_is_reported_not_raised():
     inside = CENTRE.copy()
     res = plan_rrt_connect(outside_disc, inside, GOAL, LOWER, UPPER)
@@ -88,6 +123,8 @@ def test_validity_exception_propagates():
         (dict(resolution=0.0), "resolution"),
         (dict(resolution=1.5), "resolution"),
         (dict(seed=-1), "seed"),
+        (dict(max_iterations=0), "max_iterations"),
+        (dict(max_iterations=2.5), "max_iterations"),
         (dict(q_start=[0.1, 0.5, 0.0]), "q_start"),
         (dict(q_start=[1.5, 0.5]), "q_start"),
         (dict(q_goal=[np.nan, 0.5]), "q_goal"),

@@ -30,7 +30,7 @@ def fast_params() -> InspectionParams:
         reach=ReachabilityMapParams(voxel_size=0.1, n_directions=26, n_samples=20_000, n_rotations=32),
         spot=SpotParams(ring_spacing=0.4),
         guard=GuardParams(guard_spacing=0.2),
-        nos=NoSParams(n_rays=200, rrt_time_limit=1.0),
+        nos=NoSParams(n_rays=200, rrt_max_iterations=5_000),
     )
 
 
@@ -186,19 +186,32 @@ def fig6_vs_paper(fig6: pd.DataFrame, machine: str = "test_bench", plateau_from:
 # HPR against exact ray casting
 
 
-def _visibility_trial(args) -> dict:
+#: Spherical-flipping radius factors of the HPR sensitivity study (ours): from just above the
+#: farthest point (Katz et al. need > 1) up to Open3D's tutorial value 100 (our default).
+HPR_RADIUS_FACTORS = (1.5, 2.0, 3.0, 5.0, 10.0, 30.0, 100.0)
+
+
+def _guard_poses(machine: str, n_poses: int, P_s: float, params: InspectionParams):
+    """Prepared context and at most ``n_poses`` feasible guard camera poses (m, 4, 4) of the
+    spots selected with ``P_s``, subsampled with ``params.seed``."""
     from ..geometry.machines import load_machine
     from ..mobile.plan import prepare_offline
     from ..mobile.spots import select_spots
-    from ..vision.visibility import hpr_error_rates
 
-    machine, n_poses, P_s, params = args
     ctx = prepare_offline(load_machine(machine), params=_with(params, P_s=P_s))
     sel = select_spots(ctx.accessible, ctx.candidates, P_s)
     poses = np.concatenate([ctx.guard_candidates(int(r)).world_T_camera for r in sel.greedy.selected])
     rng = np.random.default_rng(params.seed)
     if len(poses) > n_poses:
         poses = poses[np.sort(rng.choice(len(poses), n_poses, replace=False))]
+    return ctx, poses
+
+
+def _visibility_trial(args) -> dict:
+    from ..vision.visibility import hpr_error_rates
+
+    machine, n_poses, P_s, params = args
+    ctx, poses = _guard_poses(machine, n_poses, P_s, params)
     res = hpr_error_rates(ctx.machine.mesh, ctx.points, ctx.normals, poses, params.camera,
                           hpr_input=params.guard.hpr_input)
     return dict(machine=machine, poses=res["n_poses"], hpr_false_visible=res["false_visible"],
@@ -220,6 +233,81 @@ def visibility_errors(machines=("test_bench", "sanding_machine", "milling_machin
     params = InspectionParams() if params is None else params
     items = [(m, n_poses, P_s, params) for m in machines]
     return pd.DataFrame(map_trials(_visibility_trial, items, n_jobs=n_jobs, desc="HPR vs ray casting"))
+
+
+def _hpr_radius_trial(args) -> list[dict]:
+    """One machine: the same guard poses scored with every radius factor."""
+    from ..vision.visibility import hpr_error_rates
+
+    machine, factors, n_poses, P_s, params = args
+    ctx, poses = _guard_poses(machine, n_poses, P_s, params)
+    rows = []
+    for f in factors:
+        camera = dataclasses.replace(params.camera, hpr_radius_factor=f)
+        res = hpr_error_rates(ctx.machine.mesh, ctx.points, ctx.normals, poses, camera,
+                              hpr_input=params.guard.hpr_input)
+        rows.append(dict(machine=machine, radius_factor=f, poses=res["n_poses"], in_fov_pairs=res["n_in_fov"],
+                         hpr_false_visible=res["false_visible"], hpr_false_hidden=res["false_hidden"],
+                         agreement=res["agreement"]))
+    return rows
+
+
+def hpr_radius_sweep(machines=("test_bench", "sanding_machine", "milling_machine"), factors=HPR_RADIUS_FACTORS,
+                     n_poses: int = 300, P_s: float = 0.02, params: InspectionParams | None = None,
+                     n_jobs=None) -> pd.DataFrame:
+    """Sensitivity of HPR to its spherical-flipping radius, against exact ray casting.
+
+    Per machine, the guard poses of :func:`visibility_errors` (same ``n_poses``, ``P_s`` and
+    ``params.seed``) are classified by HPR with ``R = factor x`` the farthest point distance
+    for every factor, and by ray casting.
+
+    Parameters
+    ----------
+    machines : sequence of str
+    factors : sequence of float, each > 1
+        ``CameraParams.hpr_radius_factor`` values.
+    n_poses : int
+        Guard poses per machine (at most).
+    P_s : float
+        Spot threshold selecting the spots whose guard poses are used.
+    params : InspectionParams, optional
+
+    Returns
+    -------
+    DataFrame
+        One row per (machine, factor): ``machine, radius_factor, poses, in_fov_pairs,
+        hpr_false_visible, hpr_false_hidden, agreement`` (``1 - agreement`` is the fraction of
+        in-FOV pairs HPR misclassifies).
+    """
+    from ..parallel import map_trials
+    from ..params import CameraParams
+
+    params = InspectionParams() if params is None else params
+    factors = tuple(float(f) for f in factors)
+    for f in factors:  # fail before the expensive preparation
+        CameraParams(hpr_radius_factor=f)
+    items = [(m, factors, n_poses, P_s, params) for m in machines]
+    out = map_trials(_hpr_radius_trial, items, n_jobs=n_jobs, desc="HPR radius sweep")
+    return pd.DataFrame([r for rows in out for r in rows])
+
+
+def plot_hpr_radius(sweep: pd.DataFrame):
+    """HPR's false-visible and false-hidden rates against the radius factor, one line per machine."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharex=True)
+    for m, d in sweep.groupby("machine", sort=False):
+        axes[0].plot(d["radius_factor"], d["hpr_false_visible"], "o-", label=m)
+        axes[1].plot(d["radius_factor"], d["hpr_false_hidden"], "o-", label=m)
+    axes[0].set(xscale="log", xlabel="HPR radius factor", ylabel="fraction of ray-hidden in-FOV pairs",
+                title="HPR false visible")
+    axes[1].set(xscale="log", xlabel="HPR radius factor", ylabel="fraction of ray-visible in-FOV pairs",
+                title="HPR false hidden")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.tight_layout()
+    return fig
 
 
 # --------------------------------------------------------------------------------------------

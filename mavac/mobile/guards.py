@@ -18,7 +18,7 @@ import numpy as np
 from ..params import CameraParams, GuardParams
 from ..validate import check_points, check_positive
 from .greedy import GreedyResult, greedy_select
-from .reachability import OPTICAL_FRAME, optical_to_camera
+from .reachability import OPTICAL_AXIS
 
 # Random IK restarts per target after the first attempt from the home configuration (ours:
 # the reachability map already removed most unreachable targets, so few restarts are needed).
@@ -124,7 +124,7 @@ def camera_configurations(robot, checker, world_T_base, positions, axes, rng, q0
 
     Parameters
     ----------
-    robot : RobotModel with the ``camera_optical`` frame (:func:`mavac.mobile.reachability.with_optical_frame`).
+    robot : RobotModel with a ``camera_frame`` (optical axis = its x axis).
     checker : CollisionChecker
         Against the machine; its base is set to ``world_T_base`` here.
     world_T_base : (4, 4) float
@@ -148,7 +148,7 @@ def camera_configurations(robot, checker, world_T_base, positions, axes, rng, q0
     k = len(positions)
     if k == 0:
         return np.zeros(0, dtype=bool), np.zeros((0, robot.nq)), 0
-    res = ik_axis(robot, (positions - t) @ R, axes @ R, frame=OPTICAL_FRAME,
+    res = ik_axis(robot, (positions - t) @ R, axes @ R, frame=robot.camera_frame, frame_axis=OPTICAL_AXIS,
                   q0=robot.q_home if q0 is None else q0, rng=rng, n_restarts=IK_RESTARTS)
     ok = res.success.copy()
     checker.set_base(T)
@@ -163,7 +163,7 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
 
     Parameters
     ----------
-    robot : RobotModel with the ``camera_optical`` frame.
+    robot : RobotModel with a ``camera_frame``.
     checker : CollisionChecker against the machine.
     world_T_base : (4, 4) float
         The spot.
@@ -185,8 +185,7 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
     if len(q) == 0:
         return GuardCandidates(np.zeros(0, dtype=np.int64), np.zeros((0, robot.nq)), np.zeros((0, 4, 4)),
                                np.zeros(0), np.zeros((0, n), dtype=bool), len(targets), n_ik)
-    base_T_optical = fk(robot, q, OPTICAL_FRAME)
-    world_T_camera = optical_to_camera(np.asarray(world_T_base) @ base_T_optical)
+    world_T_camera = np.asarray(world_T_base) @ fk(robot, q, robot.camera_frame)
     im = np.asarray(maneuverability(robot, q), dtype=float).reshape(-1)
     return GuardCandidates(targets[ok], q, world_T_camera, im, fov_masks(points, world_T_camera, camera),
                            len(targets), n_ik)

@@ -269,7 +269,7 @@ class OfflineContext:
     Attributes
     ----------
     machine : Machine
-    robot : RobotModel (with the ``camera_optical`` frame)
+    robot : RobotModel (with a ``camera_frame``)
     params : InspectionParams
     points, normals : (n, 3) float
     candidates : (m, 3) float
@@ -343,7 +343,7 @@ def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None
     from . import guards as G
     from . import spots as SP
     from .nos import raycasting_scene
-    from .reachability import reachability_map, with_optical_frame
+    from .reachability import reachability_map
 
     params = InspectionParams() if params is None else params
     if not isinstance(params, InspectionParams):
@@ -351,7 +351,8 @@ def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None
     machine = _as_machine(mesh_or_machine)
     mesh = machine.mesh
     robot = ur10_mobile() if robot is None else robot
-    robot_o = with_optical_frame(robot)
+    if robot.camera_frame is None:
+        raise ValueError(f"robot {robot.name} has no camera_frame; MAVAC guards need a camera on the arm")
     cam = params.camera
     timings = {}
 
@@ -366,7 +367,7 @@ def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None
 
     t0 = time.perf_counter()
     cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
-    cands = cands[SP.collision_free_spots(robot_o, mesh, cands, margin=params.guard.collision_margin)]
+    cands = cands[SP.collision_free_spots(robot, mesh, cands, margin=params.guard.collision_margin)]
     vis_scene = VisibilityScene(mesh)
     if len(cands):
         spot_vis = SP.spot_visibility(P, N, cands, params.spot.view_heights, params.spot.visibility,
@@ -378,9 +379,9 @@ def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None
 
     scene = raycasting_scene(mesh)
     clear = SP.guard_clearance(scene, P, N, cam.L_d)
-    checker = CollisionChecker(robot_o, mesh, margin=params.guard.collision_margin, floor=True)
+    checker = CollisionChecker(robot, mesh, margin=params.guard.collision_margin, floor=True)
     targets = G.guard_targets(P, N, params.guard.guard_spacing)
-    return OfflineContext(machine, robot_o, params, P, N, cands, acc, clear, targets, scene, vis_scene,
+    return OfflineContext(machine, robot, params, P, N, cands, acc, clear, targets, scene, vis_scene,
                           checker, timings)
 
 
@@ -413,7 +414,6 @@ def plan_from_context(ctx: OfflineContext, params: InspectionParams | None = Non
     from . import guards as G
     from . import spots as SP
     from .nos import nos_clusters, spot_along_direction
-    from .reachability import OPTICAL_FRAME, optical_to_camera
 
     params = ctx.params if params is None else params
     if not isinstance(params, InspectionParams):
@@ -482,10 +482,11 @@ def plan_from_context(ctx: OfflineContext, params: InspectionParams | None = Non
                 checker.set_base(world_T_bases[k])
                 res = plan_rrt_connect(lambda qq: not bool(checker.in_collision(qq)), robot.q_home, q_goal,
                                        robot.q_lower, robot.q_upper, time_limit=pn.rrt_time_limit,
-                                       seed=int(rng.integers(2**31 - 1)), resolution=pn.rrt_resolution)
+                                       seed=int(rng.integers(2**31 - 1)), resolution=pn.rrt_resolution,
+                                       max_iterations=pn.rrt_max_iterations)
                 rec.update(solved=bool(res.solved), reason=res.reason, seconds=float(res.seconds))
                 if res.solved:
-                    T = optical_to_camera(world_T_bases[k] @ fk(robot, q_goal, OPTICAL_FRAME))
+                    T = world_T_bases[k] @ fk(robot, q_goal, robot.camera_frame)
                     vis = G.guard_visibility(T[None], P, N, cam, params.guard, ctx.vis_scene)[0]
                     nos_per_spot[k].append((q_goal, T, vis))
             attempts.append(rec)

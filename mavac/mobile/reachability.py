@@ -20,7 +20,6 @@ pinocchio model by pickling is slow and not stable, the fingerprint stands in fo
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import math
 from dataclasses import dataclass
@@ -31,52 +30,9 @@ from ..params import ReachabilityMapParams
 from ..validate import check_points
 from .nos import sphere_directions
 
-#: Name of the auxiliary frame whose z axis is the camera's optical axis (camera x).
-OPTICAL_FRAME = "camera_optical"
-# camera_R_optical: optical z = camera x, optical x = camera y, optical y = camera z.
-CAMERA_R_OPTICAL = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-
-
-def with_optical_frame(robot):
-    """A copy of ``robot`` with a frame ``camera_optical``: camera origin, z = optical axis.
-
-    MAVAC's camera looks along its x axis; :func:`mavac.robots.kinematics.ik_axis` aligns a
-    frame's z axis. The copy shares the collision geometry and only adds this frame to a copy
-    of the pinocchio model, so the caller's robot is untouched.
-
-    Parameters
-    ----------
-    robot : mavac.robots.models.RobotModel
-        Must have a ``camera_frame``.
-    """
-    import pinocchio as pin
-
-    if robot.camera_frame is None:
-        raise ValueError(f"robot {robot.name} has no camera_frame; MAVAC guards need a camera on the arm")
-    if robot.model.existFrame(OPTICAL_FRAME):
-        return robot
-    model = pin.Model(robot.model)
-    fid = model.getFrameId(robot.camera_frame)
-    cam = model.frames[fid]
-    model.addFrame(pin.Frame(OPTICAL_FRAME, cam.parentJoint, fid,
-                             cam.placement * pin.SE3(CAMERA_R_OPTICAL, np.zeros(3)), pin.FrameType.OP_FRAME))
-    return dataclasses.replace(robot, model=model)
-
-
-def optical_to_camera(world_T_optical) -> np.ndarray:
-    """``world_T_camera`` (camera x = optical axis) from ``world_T_optical`` (z = optical axis).
-
-    Parameters
-    ----------
-    world_T_optical : (..., 4, 4) float
-
-    Returns
-    -------
-    (..., 4, 4) float
-    """
-    T = np.array(world_T_optical, dtype=float, copy=True)
-    T[..., :3, :3] = T[..., :3, :3] @ CAMERA_R_OPTICAL.T
-    return T
+#: Column of the camera frame's rotation that is MAVAC's optical axis (camera x, see
+#: :class:`mavac.params.CameraParams`); ``ik_axis(..., frame=camera_frame, frame_axis=OPTICAL_AXIS)``.
+OPTICAL_AXIS = 0
 
 
 @dataclass(frozen=True)
@@ -279,10 +235,11 @@ def reachability_map(robot, params: ReachabilityMapParams | None = None, frame: 
     params : ReachabilityMapParams, optional
         Voxel size, number of directions, FK samples and rotations, seed.
     frame : str, optional
-        Frame mapped; default the camera's optical frame (:func:`with_optical_frame`) when the
-        robot has a camera, else the tool frame.
+        Frame mapped; default the robot's ``camera_frame`` when it has a camera, else the
+        tool frame.
     axis_column : int, optional
-        Which column of the frame rotation is the mapped axis; default 2 (z).
+        Which column of the frame rotation is the mapped axis; default :data:`OPTICAL_AXIS`
+        (camera x) for the default camera frame, else 2 (z).
     cache : bool
         Use the on-disk cache (key: robot fingerprint + frame + params).
 
@@ -297,7 +254,8 @@ def reachability_map(robot, params: ReachabilityMapParams | None = None, frame: 
         raise ValueError(f"params must be a ReachabilityMapParams, got {type(params).__name__}")
     if frame is None:
         if robot.camera_frame is not None:
-            robot, frame = with_optical_frame(robot), OPTICAL_FRAME
+            frame = robot.camera_frame
+            axis_column = OPTICAL_AXIS if axis_column is None else axis_column
         else:
             frame = robot.tool_frame
     if not robot.model.existFrame(frame):

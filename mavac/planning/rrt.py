@@ -11,8 +11,11 @@ Determinism: OMPL gives every RNG instance a seed drawn from one process-wide se
 generator. Each call re-seeds that generator (``ou.RNG.setSeed``) before allocating the
 space, planner and simplifier, and RRT-Connect stops at its first solution and the
 simplifier runs to convergence (``simplifyMax``, no time budget), so the same inputs and
-seed give the same path bit for bit -- unless the time limit cuts the search short, in which
-case there is no path to compare.
+seed give the same path bit for bit. The search stops after ``max_iterations`` evaluations of
+its termination condition (RRT-Connect evaluates it once per sample: one iteration of its main
+loop), so whether a problem is solved does not depend on the machine's speed either; the
+wall-time ``time_limit`` is only a safety cap, and the result can depend on timing only when
+that cap is what stopped the search (reason ``"Timeout"``).
 """
 
 from __future__ import annotations
@@ -38,8 +41,8 @@ class PlanResult:
     seconds : float
         Wall time of the whole call (setup, solve, simplify, interpolate), s.
     reason : str
-        ``"solved"``, ``"invalid start"``, ``"invalid goal"``, or OMPL's status otherwise
-        (e.g. ``"Timeout"``, ``"Approximate solution"``).
+        ``"solved"``, ``"invalid start"``, ``"invalid goal"``, ``"iteration budget exhausted"``,
+        or OMPL's status otherwise (e.g. ``"Timeout"`` when the time cap stopped the search).
     """
 
     path: np.ndarray | None
@@ -69,6 +72,7 @@ def plan_rrt_connect(
     time_limit: float = 1.0,
     seed: int = 0,
     resolution: float = 0.01,
+    max_iterations: int = 5_000,
 ) -> PlanResult:
     """Plan a valid joint-space path with OMPL's RRT-Connect.
 
@@ -82,12 +86,15 @@ def plan_rrt_connect(
     lower, upper : (nq,) float
         Box of the configuration space (e.g. joint limits); ``lower < upper``.
     time_limit : float, s
-        Planning time budget, > 0 (simplification is not counted in it).
+        Wall-time safety cap of the search, > 0 (simplification is not counted in it).
     seed : int, >= 0
         Seed of OMPL's random generators for this call.
     resolution : float
         Motion-validation step as a fraction of the box diagonal, in (0, 1]
         (OMPL's longest valid segment fraction); also the spacing of the returned path.
+    max_iterations : int, >= 1
+        Deterministic budget: the search stops after this many evaluations of OMPL's
+        termination condition (one per RRT-Connect iteration, i.e. per random sample).
 
     Returns
     -------
@@ -109,6 +116,7 @@ def plan_rrt_connect(
     check_range("time_limit", time_limit, 0.0, np.inf, lo_open=True)
     seed = check_int("seed", seed, 0, 2**31 - 2)
     check_range("resolution", resolution, 0.0, 1.0, lo_open=True)
+    max_iterations = check_int("max_iterations", max_iterations, 1)
 
     # Checked here so the reason is explicit (OMPL would only report "Invalid start").
     if not is_valid(qs.copy()):
@@ -153,11 +161,23 @@ def plan_rrt_connect(
             start[i] = float(qs[i])
             goal[i] = float(qg[i])
         ss.setStartAndGoalStates(start, goal)
-        status = ss.solve(float(time_limit))
+        # OMPL evaluates the condition once per RRT-Connect iteration (``while (!ptc)``); the
+        # count makes the stop deterministic, the deadline is only the safety cap.
+        calls = [0]
+        deadline = time.perf_counter() + float(time_limit)
+
+        def out_of_iterations() -> bool:
+            calls[0] += 1
+            return calls[0] > max_iterations
+
+        ptc = ob.plannerOrTerminationCondition(ob.PlannerTerminationCondition(out_of_iterations),
+                                               ob.PlannerTerminationCondition(lambda: time.perf_counter() > deadline))
+        status = ss.solve(ptc)
         if errors:
             raise errors.pop()  # pop: no cycle exception -> traceback -> checker -> errors
         if not ss.haveExactSolutionPath():
-            return PlanResult(None, False, time.perf_counter() - t0, status.asString())
+            reason = "iteration budget exhausted" if calls[0] > max_iterations else status.asString()
+            return PlanResult(None, False, time.perf_counter() - t0, reason)
         ss.simplifySolution()  # duration 0 -> simplifyMax: deterministic, no time budget
         if errors:
             raise errors.pop()
