@@ -6,6 +6,9 @@ STAMP := $(VENV)/.installed
 # Debian libraries that open3d needs at import time on a fresh machine.
 SYSTEM_LIBS := libusb-1.0-0 libgomp1
 NB := $(sort $(wildcard notebooks/*.ipynb))
+# Open3D reduces ICP sums over OpenMP threads in a run-dependent order; one thread makes
+# the same seed give the same CSV, byte for byte (parallelism comes from joblib processes).
+export OMP_NUM_THREADS := 1
 
 .PHONY: test unit notebooks reproduce bench system-deps clean
 
