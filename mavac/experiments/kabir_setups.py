@@ -1,0 +1,516 @@
+"""Notebooks 06-08: Kabir et al. (2017) Tables II-VI and Figs. 6-9 on our re-created objects.
+
+Every function returns a pandas DataFrame (or arrays for a figure) so the notebooks stay thin.
+The uniform baseline sweep (Table II) is cached on disk; the sampling experiments (Tables III,
+IV, Figs. 7-8) answer grid setups from the baseline's cover matrix (:func:`lookup_reach`, the
+exact reach results) and compute off-grid setups with the reach test, counting n_rfc either
+way; the planner experiments (Tables V, VI) run the DFBnB of :mod:`mavac.setups.setcover`
+beside its MILP certificate.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..geometry.parts import load_part
+from ..params import ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
+from ..parallel import map_trials
+from ..setups.dominance import nondominated
+from ..setups.iess import n_repeat_for, p_find_min_cover
+from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
+                            reach_targets_from_part)
+from ..setups.sampling import (VARIANTS, gradient_descent, hierarchical_sampling, random_sampling,
+                               uniform_setups, variant_plan)
+from ..setups.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_setup_cover,
+                               setup_costs_from_times)
+
+#: Kabir Fig. 6 / Tables II-VI objects, in the paper's order.
+OBJECTS = ("sine", "schwefel", "concave_bowl", "hyperboloid")
+#: Kabir Table V and VI objects (the paper drops the Schwefel, whose optimum is one setup).
+PLANNER_OBJECTS = ("hyperboloid", "sine", "concave_bowl")
+ROBOT = "puma560"
+
+
+# ---------------------------------------------------------------- baseline (Table II)
+
+
+@dataclass
+class Baseline:
+    """Uniform-grid reach sweep of one object.
+
+    Attributes
+    ----------
+    name : str
+    setups : (m, 3) float
+    cover : (m, n) bool
+    area : (n,) float, m^2
+    passes : (n,) int
+    seed : int
+        Stain seed of the part.
+    """
+
+    name: str
+    setups: np.ndarray
+    cover: np.ndarray
+    area: np.ndarray
+    passes: np.ndarray
+    seed: int = 0
+
+    @property
+    def coverable(self) -> np.ndarray:
+        """(n,) bool: patches some grid setup reaches."""
+        return self.cover.any(axis=0)
+
+    def reach(self, space: SetupSpaceParams, reach_params: ReachParams):
+        """Exact reach function: grid setups from the sweep, others by the reach test."""
+        from ..robots.models import puma560
+
+        part = load_part(self.name, seed=self.seed)
+        live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), space, reach_params)
+        return lookup_reach(self.setups, self.cover, fallback=live)
+
+
+def baseline(name: str, space: SetupSpaceParams, reach_params: ReachParams, n_jobs: int | None = None,
+             seed: int = 0) -> Baseline:
+    """Reach sweep of ``name`` over the uniform grid of ``space`` (cached on disk)."""
+    part = load_part(name, seed=seed)
+    targets = reach_targets_from_part(part)
+    setups = uniform_setups(space)
+    cover = cached_reach_sweep(ROBOT, targets.positions, targets.axes, targets.patch_targets, setups,
+                               space, reach_params, n_jobs=n_jobs)
+    return Baseline(name, setups, np.asarray(cover, dtype=bool), part.patch_areas, part.passes, seed)
+
+
+def min_cover_size(cover) -> int:
+    """Fewest setups covering every coverable patch (exact; 0 if nothing is coverable).
+
+    A greedy cover gives an upper bound and the LP relaxation a lower bound; when they meet the
+    greedy size is optimal, otherwise the unit-cost MILP (HiGHS) decides. (Unit-cost covers
+    have many optima, which makes HiGHS slow to prove one on ~10^3 setups.)
+    """
+    from scipy.optimize import Bounds, LinearConstraint, milp
+
+    cover = np.asarray(cover, dtype=bool)
+    if cover.shape[0] == 0 or not cover.any():
+        return 0
+    cols = np.unique(cover[:, cover.any(axis=0)], axis=1)  # one column per distinct patch pattern
+    left, greedy = np.ones(cols.shape[1], dtype=bool), 0
+    while left.any():
+        left &= ~cols[np.argmax((cols & left).sum(axis=1))]
+        greedy += 1
+    lp = milp(c=np.ones(cols.shape[0]), constraints=LinearConstraint(cols.T.astype(float), lb=1.0),
+              bounds=Bounds(0.0, 1.0))
+    lower = math.ceil(lp.fun - 1e-6) if lp.status == 0 else 1
+    if lower >= greedy:
+        return greedy
+    if greedy == 3 and lower == 2:  # decide 2 vs 3 by testing every pair (fast with bitsets)
+        return 2 if _pair_covers(cols) else 3
+    res = milp_setup_cover(cover, np.ones(cover.shape[0]))
+    if not res.optimal:
+        raise RuntimeError(f"MILP did not prove optimality: {res.status}")
+    return len(res.setups)
+
+
+def _pair_covers(cols: np.ndarray) -> bool:
+    """Whether two rows of ``cols`` (m, k) bool together cover every column."""
+    from ..setups.dominance import pack_rows
+
+    words = pack_rows(cols)
+    full = pack_rows(np.ones((1, cols.shape[1]), dtype=bool))[0]
+    missing = ~words & full
+    block = max(1, (1 << 22) // max(1, words.size))
+    for a in range(0, len(words), block):
+        if np.any(np.all((missing[a:a + block, None, :] & words[None, :, :]) == missing[a:a + block, None, :], axis=2)):
+            return True
+    return False
+
+
+def setup_costs(cover, area, passes, setup_time: float, cleaning_rate: float) -> np.ndarray:
+    """Eq. 1 cost per setup: ``t_s + sum(area x passes) / cleaning_rate``, (m,) s."""
+    return setup_costs_from_times(execution_time_area_passes(cover, area, passes, cleaning_rate), setup_time)
+
+
+def table2(baselines: dict) -> pd.DataFrame:
+    """Kabir Table II: minimum number of setups and non-dominated setups of the uniform grid.
+
+    Columns ``object, setups, nondominated, n_rfc`` (n_rfc = grid size, one call per setup).
+    """
+    rows = []
+    for name, b in baselines.items():
+        nd = nondominated(b.cover)
+        rows.append(dict(object=name, setups=min_cover_size(b.cover[nd]), nondominated=len(nd),
+                         n_rfc=len(b.setups)))
+    return pd.DataFrame(rows)
+
+
+def coverage_summary(baselines: dict) -> pd.DataFrame:
+    """Patches, reachable fraction and the best single setup per object."""
+    rows = []
+    for name, b in baselines.items():
+        counts = b.cover.sum(axis=1)
+        j = int(np.argmax(counts))
+        rows.append(dict(object=name, patches=b.cover.shape[1], coverable=int(b.coverable.sum()),
+                         uncoverable=int((~b.coverable).sum()), best_single_setup=int(counts[j]),
+                         best_x=b.setups[j, 0], best_y=b.setups[j, 1], best_alpha_deg=math.degrees(b.setups[j, 2]),
+                         setups_reaching_nothing=int((counts == 0).sum())))
+    return pd.DataFrame(rows)
+
+
+def save_cover_npz(b: Baseline, path, setup_time: float, cleaning_rate: float) -> Path:
+    """Non-dominated cover matrix and eq. 1 costs for the planner benchmark (arrays ``cover``,
+    ``costs``, ``setups``, ``area``)."""
+    from ..io import atomic_path
+
+    nd = nondominated(b.cover)
+    cover = b.cover[nd]
+    costs = setup_costs(cover, b.area, b.passes, setup_time, cleaning_rate)
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, cover=cover, costs=costs, setups=b.setups[nd], area=b.area)
+    return Path(path)
+
+
+# ---------------------------------------------------------------- sampling (Tables III-IV, Figs. 7-8)
+
+
+@dataclass(frozen=True)
+class _HierarchicalTask:
+    """Picklable hierarchical-sampling run for one object and variant (Table III)."""
+
+    baseline: Baseline
+    variant: str
+    optimum: int
+    space: SetupSpaceParams
+    reach_params: ReachParams
+    sampling: SamplingParams
+
+    def __call__(self, _=None) -> dict:
+        b = self.baseline
+        res = hierarchical_sampling(CountingReach(b.reach(self.space, self.reach_params)), self.space,
+                                    self.sampling, self.variant, target=b.coverable)
+        return dict(object=b.name, variant=self.variant, setups=min_cover_size(res.nondominated_cover),
+                    level=res.level, n_rfc=res.n_rfc, optimal_setups=self.optimum,
+                    covers_target=res.covers_target)
+
+
+def table3(baselines: dict, space: SetupSpaceParams, reach_params: ReachParams, sampling: SamplingParams,
+           variants=VARIANTS, n_jobs: int | None = None) -> pd.DataFrame:
+    """Kabir Table III: hierarchical uniform sampling with each gradient-descent variant.
+
+    The target is every patch the baseline grid covers. Columns ``object, variant, setups,
+    level, n_rfc`` plus ``optimal_setups`` (Table II's optimum) and ``covers_target``.
+    """
+    tasks = []
+    for name, b in baselines.items():
+        best = min_cover_size(b.cover[nondominated(b.cover)])
+        tasks += [_HierarchicalTask(b, v, best, space, reach_params, sampling) for v in variants]
+    return pd.DataFrame(map_trials(_run, tasks, n_jobs=n_jobs, desc="hierarchical sampling"))
+
+
+@dataclass(frozen=True)
+class _RandomTask:
+    """Picklable repetitions of random sampling for one object and variant."""
+
+    name: str
+    variant: str
+    seeds: tuple
+    grid: np.ndarray
+    cover: np.ndarray
+    optimum: int
+    space: SetupSpaceParams
+    sampling: SamplingParams
+
+    def __call__(self, _=None) -> list[dict]:
+        reach = lookup_reach(self.grid, self.cover)
+        target = self.cover.any(axis=0)
+        rows = []
+        for seed in self.seeds:
+            res = random_sampling(CountingReach(reach), self.space, self.sampling, self.variant, seed=seed,
+                                  target=target)
+            size = min_cover_size(res.nondominated_cover)
+            rows.append(dict(object=self.name, variant=self.variant, seed=seed, n_rfc=res.n_rfc,
+                             samples=res.samples, candidates=len(res.setups),
+                             nondominated=len(res.nondominated), setups=size, optimal_setups=self.optimum,
+                             optimal=size == self.optimum))
+        return rows
+
+
+def _run(task):
+    return task()
+
+
+def random_runs(baselines: dict, space: SetupSpaceParams, sampling: SamplingParams, variants=VARIANTS,
+                repetitions: int | None = None, n_jobs: int | None = None) -> pd.DataFrame:
+    """Kabir IX-A2: ``repetitions`` random-sampling runs per object and variant (seeds 0..r-1).
+
+    Random seeds are drawn on the baseline grid (``sampling.random_on_grid`` must be True), so
+    every reach answer comes from the baseline sweep. One row per run: ``object, variant,
+    seed, n_rfc, samples, candidates, nondominated, setups, optimal_setups, optimal``.
+    """
+    if not sampling.random_on_grid:
+        raise ValueError("sampling.random_on_grid must be True: runs are answered from the baseline grid")
+    reps = sampling.repetitions if repetitions is None else repetitions
+    tasks = []
+    for name, b in baselines.items():
+        best = min_cover_size(b.cover[nondominated(b.cover)])
+        for variant in variants:
+            tasks.append(_RandomTask(name, variant, tuple(range(reps)), b.setups, b.cover, best, space, sampling))
+    rows = map_trials(_run, tasks, n_jobs=n_jobs, desc="random sampling")
+    return pd.DataFrame([r for chunk in rows for r in chunk])
+
+
+def table4(runs: pd.DataFrame) -> pd.DataFrame:
+    """Kabir Table IV: likelihood of finding the optimal setup count. Columns ``object, variant,
+    p_optimal``."""
+    out = runs.groupby(["object", "variant"], sort=False)["optimal"].mean().reset_index()
+    return out.rename(columns={"optimal": "p_optimal"})
+
+
+def landscape(b: Baseline, space: SetupSpaceParams, alpha: float):
+    """Patches covered on the x-y grid at the grid alpha nearest ``alpha`` (Kabir Fig. 8).
+
+    Returns
+    -------
+    xs : (nx,) float, ys : (ny,) float, counts : (nx, ny) int, alpha : float (the grid value used)
+    """
+    alphas = np.unique(b.setups[:, 2])
+    a = float(alphas[np.argmin(np.abs(alphas - alpha))])
+    sel = np.isclose(b.setups[:, 2], a)
+    xs, ys = np.unique(b.setups[sel, 0]), np.unique(b.setups[sel, 1])
+    counts = b.cover[sel].sum(axis=1).reshape(len(xs), len(ys))
+    return xs, ys, counts, a
+
+
+def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alpha: float, n_paths: int = 8,
+             seed: int = 0, variant: str = "CA_XY") -> pd.DataFrame:
+    """Gradient-descent paths from random x-y seeds at a fixed grid alpha (Kabir Fig. 8).
+
+    Columns ``path, step, x, y, alpha, covered, conservative_end, absolute_end`` (the last two
+    flag the setups where the conservative and the absolute round ended).
+    """
+    reach = CountingReach(lookup_reach(b.setups, b.cover))
+    _, _, _, a = landscape(b, space, alpha)
+    grid = b.setups[np.isclose(b.setups[:, 2], a)]
+    rng = np.random.default_rng(seed)
+    rows = []
+    rounds, _ = variant_plan(variant)
+    for k, j in enumerate(rng.choice(len(grid), n_paths, replace=False)):
+        g = gradient_descent(reach, grid[j], variant, space, sampling)
+        ends = dict(zip(rounds, g.round_end_steps.tolist()))
+        for step, (s, c) in enumerate(zip(g.path, g.path_scores)):
+            rows.append(dict(path=k, step=step, x=s[0], y=s[1], alpha=s[2], covered=int(c),
+                             conservative_end=ends.get("conservative") == step,
+                             absolute_end=ends.get("absolute") == step))
+    return pd.DataFrame(rows)
+
+
+# ---------------------------------------------------------------- planner (Tables V-VI, Fig. 9)
+
+
+@dataclass
+class PlannerInstance:
+    """The 36-candidate instance of Kabir Tables V-VI for one object (level 1 grid, no GD)."""
+
+    name: str
+    setups: np.ndarray
+    cover: np.ndarray
+    area: np.ndarray
+    passes: np.ndarray
+
+
+def planner_instance(b: Baseline, space: SetupSpaceParams, reach_params: ReachParams,
+                     sampling: SamplingParams) -> PlannerInstance:
+    """Level-1 hierarchical grid without gradient descent, dominated setups removed."""
+    res = hierarchical_sampling(CountingReach(b.reach(space, reach_params)), space,
+                                dataclasses.replace(sampling, max_levels=1), "none")
+    return PlannerInstance(b.name, res.nondominated_setups, res.nondominated_cover, b.area, b.passes)
+
+
+def _dfbnb_row(inst: PlannerInstance, params: SetupPlannerParams, cleaning_rate: float) -> dict:
+    costs = setup_costs(inst.cover, inst.area, inst.passes, params.setup_time, cleaning_rate)
+    d = dfbnb_setup_cover(inst.cover, costs, inst.area, params)
+    m = milp_setup_cover(inst.cover, costs)
+    gap = (d.cost - m.cost) / m.cost if (m.optimal and math.isfinite(d.cost) and m.cost > 0) else \
+        (0.0 if d.cost == m.cost else math.inf)
+    return dict(object=inst.name, nondominated=len(inst.cover), nodes=d.node_expansions, size=len(d.setups),
+                seconds=d.seconds, cost=d.cost, milp_cost=m.cost, milp_size=len(m.setups),
+                milp_seconds=m.seconds, gap=gap, timed_out=d.timed_out, iess=d.iess)
+
+
+def table5(instances: dict, cleaning_rate: float, t_max: float, setup_time: float = 60.0) -> pd.DataFrame:
+    """Kabir Table V: node expansions with the pruning / guiding heuristics on and off
+    (Algorithm 2, bound eq. 2, ``T_max`` cap). Columns ``object, pruning, guiding, nodes,
+    pct_of_off_off`` plus ``timed_out, size, cost, milp_cost, gap``."""
+    rows = []
+    for inst in instances.values():
+        for pruning in (False, True):
+            for guiding in (False, True):
+                p = SetupPlannerParams(algorithm=2, bound="lb", pruning=pruning, guiding=guiding, t_max=t_max,
+                                       setup_time=setup_time)
+                r = _dfbnb_row(inst, p, cleaning_rate)
+                rows.append(dict(object=inst.name, pruning=pruning, guiding=guiding, nodes=r["nodes"],
+                                 timed_out=r["timed_out"], size=r["size"], cost=r["cost"],
+                                 milp_cost=r["milp_cost"], gap=r["gap"]))
+    df = pd.DataFrame(rows)
+    off = df[(~df.pruning) & (~df.guiding)].set_index("object").nodes
+    df.insert(4, "pct_of_off_off", 100.0 * df.nodes / df.object.map(off))
+    return df
+
+
+def table6(instances: dict, cleaning_rate: float, t_max: float, setup_times=(0.0, 60.0, 3000.0),
+           n_repeat: int | None = None) -> pd.DataFrame:
+    """Kabir Table VI: Algorithm 2 with eq. 2 (``lb``) and eq. 7 (``b``), Algorithm 4 with eq. 7,
+    for each setup time, MILP optimum beside each. Columns ``object, setup_time, bound,
+    algorithm, nodes, size, seconds, milp_cost, gap`` plus ``cost, milp_size, timed_out, iess``."""
+    rows = []
+    for inst in instances.values():
+        for ts in setup_times:
+            for algorithm, bound in ((2, "lb"), (2, "b"), (4, "b")):
+                p = SetupPlannerParams(algorithm=algorithm, bound=bound, t_max=t_max, setup_time=ts,
+                                       n_repeat=n_repeat if algorithm == 4 else None)
+                r = _dfbnb_row(inst, p, cleaning_rate)
+                rows.append(dict(object=inst.name, setup_time=ts, bound=bound, algorithm=algorithm,
+                                 nodes=r["nodes"], size=r["size"], seconds=r["seconds"], milp_cost=r["milp_cost"],
+                                 gap=r["gap"], cost=r["cost"], milp_size=r["milp_size"],
+                                 timed_out=r["timed_out"], iess=r["iess"]))
+    return pd.DataFrame(rows)
+
+
+def fig9(ms=(7, 12, 13, 20), prob: float = 0.9, n_repeat_grid=None) -> pd.DataFrame:
+    """Kabir Fig. 9 from eq. 5: (a-d) N_repeat reaching ``prob`` against q, (e-h) probability
+    against N_repeat for every q. Columns ``panel, m, q, n_repeat, probability``."""
+    rows = []
+    for m in ms:
+        for q in range(1, m):
+            n = n_repeat_for(m, q, prob)
+            rows.append(dict(panel="n_repeat_vs_q", m=m, q=q, n_repeat=n, probability=p_find_min_cover(q, m, n)))
+        top = n_repeat_for(m, math.ceil(m / 2), prob)
+        grid = n_repeat_grid if n_repeat_grid is not None else np.unique(
+            np.round(np.logspace(0, math.log10(max(2 * top, 10)), 60)).astype(int))
+        for q in range(1, m):
+            for n in grid:
+                rows.append(dict(panel="probability_vs_n_repeat", m=m, q=q, n_repeat=int(n),
+                                 probability=p_find_min_cover(q, m, int(n))))
+    return pd.DataFrame(rows)
+
+
+# ---------------------------------------------------------------- figures
+
+
+def plot_objects(names=OBJECTS, seed: int = 0):
+    """Kabir Fig. 6: the four objects, stain in red (darker = more passes)."""
+    from ..viz.plots import new_figure, plot_mesh
+
+    fig, axes = new_figure(ncols=len(names), projection="3d", size=(4.5, 4.0))
+    for ax, name in zip(np.atleast_1d(axes), names):
+        part = load_part(name, seed=seed)
+        colors = np.tile([0.78, 0.78, 0.82, 1.0], (len(part.mesh.faces), 1))
+        shade = {1: [1.0, 0.6, 0.6, 1.0], 2: [0.95, 0.25, 0.25, 1.0], 3: [0.7, 0.0, 0.0, 1.0]}
+        colors[part.stain_faces] = [shade[int(p)] for p in part.passes]
+        plot_mesh(ax, part.mesh, face_colors=colors, alpha=1.0, max_faces=20000)
+        ext = part.mesh.extents
+        ax.set_title(f"{name}\n{ext[0]:.2f} x {ext[1]:.2f} x {ext[2]:.2f} m, {len(part.stain_faces)} patches")
+    return fig
+
+
+def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachParams):
+    """One setup seen from above in the robot base frame: reachable patches green, others red,
+    the robot's joint-1 axis at the origin and the setup square dashed."""
+    from ..viz.plots import new_figure
+
+    part = load_part(b.name, seed=b.seed)
+    setup = np.asarray(setup, dtype=float)
+    j = int(np.argmin(np.linalg.norm(b.setups - setup, axis=1)))
+    T = base_T_part(b.setups[j][None], space)[0]
+    centres = part.mesh.triangles_center[part.stain_faces] @ T[:3, :3].T + T[:3, 3]
+    fig, ax = new_figure(size=(6, 5))
+    ok = b.cover[j]
+    ax.scatter(centres[~ok, 0], centres[~ok, 1], s=2, c="tab:red", label="unreachable patch")
+    ax.scatter(centres[ok, 0], centres[ok, 1], s=2, c="tab:green", label="reachable patch")
+    ax.plot([0], [0], "k^", ms=8, label="Puma 560 joint 1")
+    sq = np.array([[space.x_min, space.y_min], [space.x_max, space.y_min], [space.x_max, space.y_max],
+                   [space.x_min, space.y_max], [space.x_min, space.y_min]]) + [space.origin_x, space.origin_y]
+    ax.plot(sq[:, 0], sq[:, 1], "k--", lw=1, label="setup square (part origin)")
+    circle = np.linspace(0, 2 * np.pi, 200)
+    ax.plot(0.864 * np.cos(circle), 0.864 * np.sin(circle), ":", c="grey", lw=1, label="a2 + d4 = 0.864 m")
+    ax.set_aspect("equal")
+    ax.set_xlabel("base x [m]")
+    ax.set_ylabel("base y [m]")
+    x, y, a = b.setups[j]
+    ax.set_title(f"{b.name}: setup ({x:.2f} m, {y:.2f} m, {math.degrees(a):.0f} deg), "
+                 f"{int(ok.sum())}/{len(ok)} patches")
+    ax.legend(loc="upper left", fontsize=7)
+    return fig
+
+
+def plot_fig7(runs: pd.DataFrame):
+    """Kabir Fig. 7: n_rfc of the random-sampling runs per variant, one panel per object."""
+    from ..viz.plots import new_figure
+
+    names = list(dict.fromkeys(runs.object))
+    fig, axes = new_figure(ncols=len(names), size=(4.0, 3.5))
+    for ax, name in zip(np.atleast_1d(axes), names):
+        sub = runs[runs.object == name]
+        variants = list(dict.fromkeys(sub.variant))
+        ax.boxplot([sub[sub.variant == v].n_rfc.to_numpy() for v in variants], showfliers=True)
+        ax.set_xticks(range(1, len(variants) + 1), variants, rotation=60, fontsize=7)
+        ax.set_title(name)
+        ax.set_ylabel("n_rfc")
+    fig.tight_layout()
+    return fig
+
+
+def plot_fig8(b: Baseline, space: SetupSpaceParams, paths: pd.DataFrame, alpha: float):
+    """Kabir Fig. 8: coverage landscape over x-y at fixed alpha with gradient-descent paths
+    (black = seed, green = end of the conservative round, red = end of the absolute round)."""
+    from ..viz.plots import new_figure
+
+    xs, ys, counts, a = landscape(b, space, alpha)
+    n = paths.path.nunique()
+    cols = min(4, n)
+    fig, axes = new_figure(ncols=cols, nrows=math.ceil(n / cols), size=(3.6, 3.2))
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    for k, ax in zip(range(n), np.atleast_1d(axes)):
+        cs = ax.contourf(X, Y, counts, levels=20, cmap="viridis")
+        p = paths[paths.path == k].sort_values("step")
+        ax.plot(p.x, p.y, "w-", lw=1)
+        ax.plot(p.x.iloc[0], p.y.iloc[0], "k*", ms=10)
+        cons, absolute = p[p.conservative_end], p[p.absolute_end]
+        ax.plot(cons.x, cons.y, "g*", ms=12)
+        ax.plot(absolute.x, absolute.y, "r*", ms=8)
+        ax.set_title(" -> ".join(str(int(v)) for v in (p.covered.iloc[0], *cons.covered, *absolute.covered)),
+                     fontsize=8)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.subplots_adjust(hspace=0.55, wspace=0.4)
+    fig.colorbar(cs, ax=list(np.atleast_1d(axes)), shrink=0.6, label="patches reached")
+    fig.suptitle(f"{b.name}, alpha = {math.degrees(a):.0f} deg")
+    return fig
+
+
+def plot_fig9(df: pd.DataFrame):
+    """Kabir Fig. 9: N_repeat vs q (top) and probability vs N_repeat (bottom) per m."""
+    from ..viz.plots import new_figure
+
+    ms = sorted(df.m.unique())
+    fig, axes = new_figure(ncols=len(ms), nrows=2, size=(3.5, 3.0))
+    axes = np.asarray(axes).reshape(2, len(ms))
+    for i, m in enumerate(ms):
+        top = df[(df.m == m) & (df.panel == "n_repeat_vs_q")]
+        axes[0, i].semilogy(top.q, top.n_repeat, "o-", ms=3)
+        axes[0, i].set_title(f"m = {m}")
+        axes[0, i].set_xlabel("q")
+        axes[0, i].set_ylabel("N_repeat for p >= 0.9")
+        bot = df[(df.m == m) & (df.panel == "probability_vs_n_repeat")]
+        for q, g in bot.groupby("q"):
+            axes[1, i].semilogx(g.n_repeat, g.probability, lw=1)
+        axes[1, i].set_xlabel("N_repeat")
+        axes[1, i].set_ylabel("probability")
+    fig.tight_layout()
+    return fig

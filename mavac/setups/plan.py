@@ -1,0 +1,185 @@
+"""``plan_setups``: from a stained part to an ordered setup plan (Kabir et al. 2017, III-V).
+
+part + stain -> IK targets -> candidate setups (uniform / hierarchical / random sampling with
+gradient descent, counted in n_rfc) -> non-dominated setups -> setup costs (eq. 1:
+``t_s + t_e``, with ``t_e = sum(area x passes) / cleaning_rate``) -> set-cover planner
+(DFBnB and/or the MILP certificate) -> setups in execution order with the patches each cleans.
+Patches that no candidate setup reaches are listed, never searched for.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..params import SetupPlanParams
+from .reach import CountingReach, PartReach, reach_targets
+from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
+from .setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
+
+
+@dataclass
+class SetupPlan:
+    """An ordered setup plan for one part.
+
+    Attributes
+    ----------
+    part_name : str
+    setups : (k, 3) float
+        ``(x [m], y [m], alpha [rad])`` of each setup, in execution order (see
+        :class:`mavac.params.SetupSpaceParams` for where the space sits).
+    patches : list of (k_j,) int
+        Patches (indices into the part's stain) cleaned at each step: those the setup reaches
+        that no earlier step cleaned.
+    reachable : list of (r_j,) int
+        Every patch each setup reaches.
+    step_costs : (k,) float, s
+        ``t_s + t_e(tau_j)`` per setup (eq. 1).
+    cost : float, s
+        ``T(S)``, the plan's total time (0 for an empty stain).
+    setup_time_total, execution_time_total : float, s
+        The two parts of ``cost``.
+    node_expansions : int
+        DFBnB nodes (0 when only the MILP ran).
+    n_rfc : int
+        Reach-test calls spent on the candidates (Kabir Sec. IX-A1).
+    candidates : int
+        Candidate setups found by sampling (distinct).
+    nondominated : int
+        Candidates left after dominance elimination (the planner's input).
+    certificate_cost : float or None
+        MILP optimum of the same instance.
+    certificate_gap : float or None
+        ``(cost - certificate_cost) / certificate_cost``; 0 means the plan is proven optimal
+        over the candidates.
+    status : str
+        The planner's status ("optimal", "timed_out", "no_solution", "empty").
+    uncoverable : (u,) int
+        Patches no candidate setup reaches (not in the plan).
+    seconds : float
+        Wall time of the whole call.
+    """
+
+    part_name: str
+    setups: np.ndarray
+    patches: list
+    reachable: list
+    step_costs: np.ndarray
+    cost: float
+    setup_time_total: float
+    execution_time_total: float
+    node_expansions: int
+    n_rfc: int
+    candidates: int
+    nondominated: int
+    certificate_cost: float | None
+    certificate_gap: float | None
+    status: str
+    uncoverable: np.ndarray
+    seconds: float
+
+    def summary(self) -> str:
+        """A few lines a person can read."""
+        lines = [f"{self.part_name}: {len(self.setups)} setups, T = {self.cost:.1f} s "
+                 f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "
+                 f"status {self.status}, n_rfc {self.n_rfc}, {self.nondominated} non-dominated of "
+                 f"{self.candidates} candidates, {self.node_expansions} DFBnB nodes"]
+        if self.certificate_gap is not None:
+            lines.append(f"  MILP optimum {self.certificate_cost:.1f} s, gap {100 * self.certificate_gap:.2f} %")
+        for j, (s, p) in enumerate(zip(self.setups, self.patches)):
+            lines.append(f"  setup {j + 1}: x = {s[0]:.3f} m, y = {s[1]:.3f} m, "
+                         f"alpha = {math.degrees(s[2]):.1f} deg, {len(p)} patches")
+        if len(self.uncoverable):
+            lines.append(f"  {len(self.uncoverable)} patches no setup reaches")
+        return "\n".join(lines)
+
+
+def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> SetupPlan:
+    """Plan the setups that clean a part's stain (Kabir et al. 2017).
+
+    Parameters
+    ----------
+    part : Part
+        Anything with ``patch_vertices (n, 3, 3)``, ``patch_normals (n, 3)``,
+        ``patch_areas (n,)``, ``passes (n,)`` (part frame, metres) and ``name``; ``mesh`` too
+        when ``params.reach.check_collision``. See :func:`mavac.geometry.parts.load_part` and
+        :func:`mavac.geometry.parts.part_from_mesh`.
+    robot : RobotModel, optional
+        Default ``puma560(tool_length=params.reach.tool_length)``; its base frame is where
+        :class:`mavac.params.SetupSpaceParams` places the part.
+    params : SetupPlanParams, optional
+
+    Returns
+    -------
+    SetupPlan
+
+    Notes
+    -----
+    Hierarchical sampling refines until every patch is covered; a patch that no setup can reach
+    keeps it refining up to ``params.sampling.max_levels`` levels, after which the patch is
+    listed in ``SetupPlan.uncoverable``.
+    """
+    t0 = time.perf_counter()
+    params = SetupPlanParams() if params is None else params
+    if not isinstance(params, SetupPlanParams):
+        raise ValueError(f"params must be a SetupPlanParams, got {type(params).__name__}")
+    name = str(getattr(part, "name", "part"))
+    vertices = np.asarray(part.patch_vertices, dtype=float).reshape(-1, 3, 3)
+    normals = np.asarray(part.patch_normals, dtype=float).reshape(-1, 3)
+    area = np.asarray(part.patch_areas, dtype=float).reshape(-1)
+    passes = np.asarray(part.passes).reshape(-1)
+    n = len(vertices)
+    if not (len(normals) == len(area) == len(passes) == n):
+        raise ValueError(f"part: patch_vertices, patch_normals, patch_areas and passes must have the same "
+                         f"length, got {n}, {len(normals)}, {len(area)}, {len(passes)}")
+    if n == 0:
+        return _empty_plan(name, time.perf_counter() - t0)
+    if robot is None:
+        from ..robots.models import puma560
+
+        robot = puma560(tool_length=params.reach.tool_length)
+    mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
+    reach = CountingReach(PartReach(robot, reach_targets(vertices, normals), params.space, params.reach, mesh))
+
+    if params.sampling_method == "uniform":
+        sampled = uniform_sampling(reach, params.space)
+    elif params.sampling_method == "hierarchical":
+        sampled = hierarchical_sampling(reach, params.space, params.sampling, params.variant)
+    else:
+        sampled = random_sampling(reach, params.space, params.sampling, params.variant, seed=params.seed)
+    cover = sampled.nondominated_cover
+    setups = sampled.nondominated_setups
+    if len(setups) == 0:
+        plan = _empty_plan(name, 0.0)
+        plan.n_rfc, plan.candidates, plan.status = reach.n_rfc, len(sampled.setups), "no_solution"
+        plan.uncoverable = np.arange(n)
+        plan.seconds = time.perf_counter() - t0
+        return plan
+
+    t_s = params.planner.setup_time
+    costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
+    res = solve_setup_cover(cover, costs, area, params.planner, params.method, setup_time=t_s)
+    done = np.zeros(n, dtype=bool)
+    patches, reachable = [], []
+    for j in res.setups:
+        reachable.append(np.flatnonzero(cover[j]))
+        patches.append(np.flatnonzero(cover[j] & ~done))
+        done |= cover[j]
+    return SetupPlan(
+        part_name=name, setups=setups[res.setups], patches=patches, reachable=reachable,
+        step_costs=res.step_costs, cost=res.cost, setup_time_total=res.setup_time_total or 0.0,
+        execution_time_total=res.execution_time_total or 0.0, node_expansions=res.node_expansions,
+        n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
+        certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
+        uncoverable=np.asarray(res.uncoverable, dtype=np.int64), seconds=time.perf_counter() - t0)
+
+
+def _empty_plan(name: str, seconds: float) -> SetupPlan:
+    return SetupPlan(
+        part_name=name, setups=np.zeros((0, 3)), patches=[], reachable=[], step_costs=np.zeros(0),
+        cost=0.0, setup_time_total=0.0, execution_time_total=0.0, node_expansions=0, n_rfc=0,
+        candidates=0, nondominated=0, certificate_cost=0.0, certificate_gap=0.0, status="empty",
+        uncoverable=np.zeros(0, dtype=np.int64), seconds=seconds)

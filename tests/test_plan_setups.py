@@ -1,0 +1,116 @@
+"""plan_setups end to end on small stains: coverage, uncoverable patches, certificate, errors."""
+
+import dataclasses
+import functools
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from mavac.geometry.parts import load_part
+from mavac.params import SetupPlannerParams, SetupPlanParams
+from mavac.robots.models import puma560
+from mavac.setups.plan import plan_setups
+
+
+@functools.lru_cache(maxsize=1)
+def robot():
+    return puma560(tool_length=SetupPlanParams().reach.tool_length)
+
+
+def small_stain(name="concave_bowl", step=40, far_patch=False):
+    """Every ``step``-th stain patch of a test object (optionally one patch 10 m away)."""
+    part = load_part(name)
+    v, n = part.patch_vertices[::step], part.patch_normals[::step]
+    a, p = part.patch_areas[::step], part.passes[::step]
+    if far_patch:
+        v = np.concatenate([v, v[:1] + [10.0, 0.0, 0.0]])
+        n, a, p = np.concatenate([n, n[:1]]), np.concatenate([a, a[:1]]), np.concatenate([p, p[:1]])
+    return SimpleNamespace(name=f"{name}_small", patch_vertices=v, patch_normals=n, patch_areas=a, passes=p)
+
+
+FAST = SetupPlanParams(planner=SetupPlannerParams(t_max=5.0))
+
+
+def check_plan(plan, n):
+    covered = np.zeros(n, bool)
+    for new, reach in zip(plan.patches, plan.reachable):
+        assert not covered[new].any()  # each patch is cleaned once
+        assert set(new) <= set(reach)
+        covered[new] = True
+    assert np.array_equal(~covered, np.isin(np.arange(n), plan.uncoverable))
+    assert len(plan.setups) == len(plan.patches) == len(plan.step_costs)
+    assert np.isclose(plan.cost, plan.step_costs.sum())
+    assert np.isclose(plan.cost, plan.setup_time_total + plan.execution_time_total)
+
+
+def test_plan_covers_every_coverable_patch_with_a_certificate():
+    part = small_stain()
+    plan = plan_setups(part, robot=robot(), params=FAST)
+    check_plan(plan, len(part.passes))
+    assert plan.n_rfc > 0 and plan.nondominated <= plan.candidates
+    assert len(plan.uncoverable) < len(part.passes)
+    assert plan.certificate_cost is not None and plan.cost >= plan.certificate_cost - 1e-6
+    if plan.status == "optimal":
+        assert plan.certificate_gap == pytest.approx(0.0, abs=1e-9)
+    assert "setup 1" in plan.summary()
+
+
+def test_uncoverable_patches_are_listed_not_searched():
+    part = small_stain(far_patch=True)
+    # the far patch keeps hierarchical sampling refining: two levels bound the run
+    params = dataclasses.replace(FAST, sampling=dataclasses.replace(FAST.sampling, max_levels=2))
+    plan = plan_setups(part, robot=robot(), params=params)
+    far = len(part.passes) - 1
+    assert far in set(plan.uncoverable.tolist())
+    check_plan(plan, len(part.passes))
+
+
+def test_empty_stain_gives_an_empty_plan():
+    empty = SimpleNamespace(name="empty", patch_vertices=np.zeros((0, 3, 3)), patch_normals=np.zeros((0, 3)),
+                            patch_areas=np.zeros(0), passes=np.zeros(0, int))
+    plan = plan_setups(empty, robot=robot())
+    assert len(plan.setups) == 0 and plan.cost == 0.0 and plan.status == "empty" and plan.n_rfc == 0
+
+
+def test_plan_is_deterministic_and_milp_matches_dfbnb_without_time_bound():
+    part = small_stain(step=60)
+    milp = plan_setups(part, robot=robot(), params=dataclasses.replace(FAST, method="milp"))
+    again = plan_setups(part, robot=robot(), params=dataclasses.replace(FAST, method="milp"))
+    np.testing.assert_array_equal(milp.setups, again.setups)
+    assert milp.n_rfc == again.n_rfc
+    both = plan_setups(part, robot=robot(), params=dataclasses.replace(
+        FAST, method="both", planner=SetupPlannerParams(t_max=None)))
+    assert both.status == "optimal"
+    assert both.cost == pytest.approx(milp.cost)
+    assert both.certificate_gap == pytest.approx(0.0, abs=1e-9)
+
+
+def test_random_and_uniform_sampling_paths_run():
+    part = small_stain(step=80)
+    coarse = dataclasses.replace(FAST.space, res_x=0.25, res_y=0.25, res_alpha=np.radians(60))
+    for method in ("uniform", "random"):
+        params = dataclasses.replace(FAST, space=coarse, sampling_method=method, method="milp",
+                                     sampling=dataclasses.replace(FAST.sampling, gd_step_x=0.25, gd_step_y=0.25,
+                                                                  gd_step_alpha=np.radians(60)))
+        plan = plan_setups(part, robot=robot(), params=params)
+        check_plan(plan, len(part.passes))
+        if method == "uniform":
+            assert plan.n_rfc == 5 * 5 * 7
+
+
+def test_bad_parameters_raise_value_errors():
+    with pytest.raises(ValueError, match="sampling_method"):
+        SetupPlanParams(sampling_method="grid")
+    with pytest.raises(ValueError, match="variant"):
+        SetupPlanParams(variant="XY")
+    with pytest.raises(ValueError, match="cleaning_rate"):
+        SetupPlanParams(cleaning_rate=0.0)
+    with pytest.raises(ValueError, match="setup_time"):
+        SetupPlannerParams(setup_time=-1.0)
+    with pytest.raises(ValueError, match="params"):
+        plan_setups(small_stain(), robot=robot(), params=SetupPlannerParams())
+    bad = small_stain()
+    bad.passes = bad.passes[:-1]
+    with pytest.raises(ValueError, match="same length"):
+        plan_setups(bad, robot=robot())

@@ -1,0 +1,153 @@
+"""Kabir reach test: batched closed-form vs per-point DLS, all-three-vertices rule, placement."""
+
+import functools
+
+import numpy as np
+import pytest
+import trimesh
+
+from mavac.geometry.parts import load_part
+from mavac.params import ReachParams, SetupSpaceParams
+from mavac.robots.kinematics import fk, ik_axis
+from mavac.robots.models import puma560
+from mavac.setups import reach as R
+from mavac.setups.sampling import uniform_setups
+
+SPACE = SetupSpaceParams()
+PARAMS = ReachParams()
+
+
+@functools.lru_cache(maxsize=1)
+def robot():
+    return puma560(tool_length=PARAMS.tool_length)
+
+
+@functools.lru_cache(maxsize=1)
+def bowl_sample():
+    """300 patches of the concave bowl's stain (every 16th)."""
+    part = load_part("concave_bowl")
+    return part.patch_vertices[::16], part.patch_normals[::16]
+
+
+def vertex_reach(targets, setups, method):
+    """Per-target reachability by a direct ik_axis call, (k, t) bool."""
+    T = R.base_T_part(setups, SPACE)
+    pos = np.einsum("kij,tj->kti", T[:, :3, :3], targets.positions) + T[:, None, :3, 3]
+    ax = np.einsum("kij,tj->kti", T[:, :3, :3], targets.axes)
+    kw = {"rng": np.random.default_rng(0)} if method == "dls" else {}
+    ok = ik_axis(robot(), pos.reshape(-1, 3), ax.reshape(-1, 3), method=method, **kw).success
+    return ok.reshape(len(setups), -1)
+
+
+def test_base_T_part_places_the_setup_square_in_front_of_the_robot():
+    T = R.base_T_part(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, np.pi / 2]]), SPACE)
+    np.testing.assert_allclose(T[0, :3, 3], [SPACE.origin_x, SPACE.origin_y, SPACE.table_z])
+    np.testing.assert_allclose(T[1, :3, 3], [SPACE.origin_x + 1, SPACE.origin_y + 1, SPACE.table_z])
+    np.testing.assert_allclose(T[1, :3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-12)
+
+
+def test_targets_are_distinct_vertex_normal_pairs():
+    # two coplanar triangles share an edge (4 targets); folding one gives 6
+    flat = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[1, 0, 0], [1, 1, 0], [0, 1, 0]]], float)
+    up = np.array([[0, 0, 1.0], [0, 0, 1.0]])
+    t = R.reach_targets(flat, up)
+    assert t.n_targets == 4 and t.n_patches == 2
+    np.testing.assert_allclose(t.axes, np.tile([0, 0, -1.0], (4, 1)))
+    np.testing.assert_allclose(t.positions[t.patch_targets], flat)
+    tilted = np.array([[0, 0, 1.0], [0, 0.6, 0.8]])
+    assert R.reach_targets(flat, tilted).n_targets == 6
+    with pytest.raises(ValueError, match="patch_vertices"):
+        R.reach_targets(np.zeros((2, 3)), up)
+    with pytest.raises(ValueError, match="patch_normals"):
+        R.reach_targets(flat, np.zeros((2, 3)))
+
+
+def test_reach_bound_contains_every_configuration():
+    rb = R.reach_bound(robot())
+    rng = np.random.default_rng(0)
+    q = rng.uniform(robot().q_lower, robot().q_upper, (2000, 6))
+    T = fk(robot(), q)
+    d = T[:, :3, 3] - rb.tool_offset * T[:, :3, 2] - rb.centre
+    assert np.all(np.linalg.norm(d, axis=1) <= rb.radius + 1e-9)
+
+
+def test_patch_reachable_iff_all_three_vertices_reachable():
+    v, n = bowl_sample()
+    targets = R.reach_targets(v, n)
+    rng = np.random.default_rng(1)
+    grid = uniform_setups(SPACE)
+    setups = grid[rng.choice(len(grid), 12, replace=False)]
+    cover = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
+    per_vertex = vertex_reach(targets, setups, "closed_form")
+    np.testing.assert_array_equal(cover, per_vertex[:, targets.patch_targets].all(axis=2))
+    # the sample must exercise both outcomes and partially reachable patches
+    some = per_vertex[:, targets.patch_targets].any(axis=2)
+    assert cover.any() and (~cover).any() and (some & ~cover).any()
+
+
+def test_batched_reach_agrees_with_per_point_dls():
+    v, n = bowl_sample()
+    targets = R.reach_targets(v[::3], n[::3])
+    rng = np.random.default_rng(2)
+    grid = uniform_setups(SPACE)
+    setups = grid[rng.choice(len(grid), 3, replace=False)]
+    closed = vertex_reach(targets, setups, "closed_form")
+    dls = vertex_reach(targets, setups, "dls")
+    # a DLS solution is a solution: the closed form (complete, 8 branches) must find one too
+    assert not np.any(dls & ~closed)
+    # and DLS with restarts finds almost every solution the closed form finds
+    assert (dls == closed).mean() >= 0.95
+    cover = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
+    np.testing.assert_array_equal(cover, closed[:, targets.patch_targets].all(axis=2))
+
+
+def test_batches_of_any_size_give_the_same_answer():
+    v, n = bowl_sample()
+    targets = R.reach_targets(v, n)
+    setups = uniform_setups(SPACE, (0.5, 0.5, np.radians(120)))
+    a = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
+    b = R.patch_reach(robot(), targets, setups, SPACE, ReachParams(batch_size=1000))
+    np.testing.assert_array_equal(a, b)
+    assert R.patch_reach(robot(), targets, np.zeros((0, 3)), SPACE).shape == (0, len(v))
+
+
+def test_counting_reach_counts_one_call_per_new_setup():
+    v, n = bowl_sample()
+    reach = R.CountingReach(R.PartReach(robot(), R.reach_targets(v, n), SPACE, PARAMS))
+    s = uniform_setups(SPACE, (0.5, 0.5, np.radians(120)))[:5]
+    a = reach(s)
+    b = reach(s[::-1])
+    assert reach.n_rfc == 5
+    np.testing.assert_array_equal(a[::-1], b)
+
+
+def test_collision_option_only_removes_patches():
+    v, n = bowl_sample()
+    part = load_part("concave_bowl")
+    targets = R.reach_targets(v[::4], n[::4])
+    setups = np.array([[0.2, 0.5, 0.0]])
+    free = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
+    checked = R.patch_reach(robot(), targets, setups, SPACE, ReachParams(check_collision=True), part.mesh)
+    assert not np.any(checked & ~free)
+    with pytest.raises(ValueError, match="part_mesh"):
+        R.patch_reach(robot(), targets, setups, SPACE, ReachParams(check_collision=True))
+
+
+def test_reach_params_validate():
+    with pytest.raises(ValueError, match="tool_length"):
+        ReachParams(tool_length=-0.1)
+    with pytest.raises(ValueError, match="batch_size"):
+        ReachParams(batch_size=0)
+    with pytest.raises(ValueError, match="setups"):
+        R.base_T_part(np.zeros((2, 2)), SPACE)
+
+
+def test_a_box_far_away_is_unreachable_and_a_near_one_is_not():
+    box = trimesh.creation.box((0.2, 0.2, 0.2))
+    box.apply_translation([0, 0, 0.1])
+    top = np.flatnonzero(box.face_normals[:, 2] > 0.9)
+    targets = R.reach_targets(box.triangles[top], box.face_normals[top])
+    far = dict(origin_x=5.0)
+    cover_far = R.patch_reach(robot(), targets, np.zeros((1, 3)), SetupSpaceParams(**far), PARAMS)
+    cover_near = R.patch_reach(robot(), targets, np.array([[0.2, 0.5, 0.0]]), SPACE, PARAMS)
+    assert not cover_far.any() and cover_near.all()

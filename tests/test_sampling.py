@@ -1,0 +1,197 @@
+"""Candidate-setup sampling and gradient descent (Kabir Sec. IV) on a toy reach function."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from mavac.params import SamplingParams, SetupSpaceParams
+from mavac.setups import sampling as S
+
+
+def toy_reach(n=60, seed=0, radius=0.45, centre=(0.5, 0.5)):
+    """Patches at random part-frame points; reachable when inside a disc around ``centre``
+    after placing the part at (x, y) rotated by alpha (mimics a robot workspace)."""
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-0.5, 0.5, (n, 2)) * np.array([1.0, 0.6])
+    c = np.asarray(centre)
+
+    def reach(setups):
+        setups = np.asarray(setups, float)
+        ca, sa = np.cos(setups[:, 2]), np.sin(setups[:, 2])
+        wx = setups[:, :1] + ca[:, None] * pts[:, 0] - sa[:, None] * pts[:, 1]
+        wy = setups[:, 1:2] + sa[:, None] * pts[:, 0] + ca[:, None] * pts[:, 1]
+        return (wx - c[0]) ** 2 + (wy - c[1]) ** 2 < radius**2
+
+    return reach
+
+
+SPACE = SetupSpaceParams()
+COARSE_SPACE = dataclasses.replace(SPACE, res_x=0.1, res_y=0.1, res_alpha=math.radians(30))
+SAMP = SamplingParams()
+COARSE_SAMP = dataclasses.replace(SAMP, gd_step_x=0.1, gd_step_y=0.1, gd_step_alpha=math.radians(30))
+
+
+def test_paper_grid_has_16317_setups():
+    xs, ys, alphas = S.grid_axes(SPACE)
+    assert (len(xs), len(ys), len(alphas)) == (21, 21, 37)
+    grid = S.uniform_setups(SPACE)
+    assert grid.shape == (16317, 3)
+    assert grid[:, 0].min() == 0.0 and math.isclose(grid[:, 0].max(), 1.0)
+    assert math.isclose(grid[:, 2].max(), 2 * math.pi)
+    assert len(set(S.setup_keys(grid))) == len(grid)
+
+
+def test_level_one_has_36_setups_and_levels_halve_one_axis_at_a_time():
+    coarse = np.array([SAMP.coarse_res_x, SAMP.coarse_res_y, SAMP.coarse_res_alpha])
+    assert len(S.uniform_setups(SPACE, S.hierarchy_resolution(coarse, 1))) == 36
+    np.testing.assert_allclose(S.hierarchy_resolution(coarse, 2), coarse * [0.5, 1, 1])
+    np.testing.assert_allclose(S.hierarchy_resolution(coarse, 3), coarse * [0.5, 0.5, 1])
+    np.testing.assert_allclose(S.hierarchy_resolution(coarse, 4), coarse * 0.5)
+    np.testing.assert_allclose(S.hierarchy_resolution(coarse, 5), coarse * [0.25, 0.5, 0.5])
+
+
+def test_bad_inputs_raise_value_errors_naming_the_parameter():
+    with pytest.raises(ValueError, match="res_x"):
+        SetupSpaceParams(res_x=0.0)
+    with pytest.raises(ValueError, match="res_alpha"):
+        SetupSpaceParams(res_alpha=-1.0)
+    with pytest.raises(ValueError, match="res_y"):
+        S.uniform_setups(SPACE, (0.05, 0.0, 0.1))
+    with pytest.raises(ValueError, match="coarse_res_x"):
+        SamplingParams(coarse_res_x=0.0)
+    with pytest.raises(ValueError, match="gd_step_alpha"):
+        SamplingParams(gd_step_alpha=-0.1)
+    with pytest.raises(ValueError, match="repetitions"):
+        SamplingParams(repetitions=0)
+    with pytest.raises(ValueError, match="variant"):
+        S.hierarchical_sampling(toy_reach(), SPACE, SAMP, variant="XY")
+    with pytest.raises(ValueError, match="scoring"):
+        S.score(np.ones(3, bool), np.ones((1, 3), bool), "greedy")
+    with pytest.raises(ValueError, match="x_min"):
+        SetupSpaceParams(x_min=2.0)
+
+
+def test_scores_follow_section_iv_b():
+    p1 = np.array([1, 1, 0, 0], bool)
+    p2 = np.array([[1, 1, 1, 0], [1, 0, 1, 1], [0, 0, 0, 0]], bool)
+    np.testing.assert_array_equal(S.score(p1, p2, "absolute"), [3, 3, 0])
+    # superset -> |P2|; otherwise |P1 & P2|
+    np.testing.assert_array_equal(S.score(p1, p2, "conservative"), [3, 1, 0])
+
+
+def test_counting_reach_counts_each_setup_once():
+    calls = []
+    base = toy_reach()
+
+    def reach(s):
+        calls.append(len(s))
+        return base(s)
+
+    counted = S.CountingReach(reach)
+    grid = S.uniform_setups(COARSE_SPACE)[:50]
+    a = counted(grid)
+    b = counted(np.concatenate([grid[:10], grid[:10]]))
+    assert counted.n_rfc == 50 and sum(calls) == 50
+    np.testing.assert_array_equal(a[:10], b[:10])
+    np.testing.assert_array_equal(a, base(grid))
+
+
+def test_lookup_reach_reproduces_the_reach_function_on_the_grid():
+    reach = toy_reach()
+    grid = S.uniform_setups(COARSE_SPACE)
+    look = S.lookup_reach(grid, reach(grid))
+    pick = grid[::7]
+    np.testing.assert_array_equal(look(pick), reach(pick))
+    with pytest.raises(KeyError):
+        look(np.array([[0.123, 0.456, 0.789]]))
+    fallback = S.lookup_reach(grid, reach(grid), fallback=reach)
+    off = np.array([[0.123, 0.456, 0.789]])
+    np.testing.assert_array_equal(fallback(off), reach(off))
+
+
+@pytest.mark.parametrize("variant", S.GD_VARIANTS)
+def test_gradient_descent_never_decreases_and_conservative_keeps_the_seed(variant):
+    reach = S.CountingReach(toy_reach(n=80, seed=3))
+    rng = np.random.default_rng(1)
+    grid = S.uniform_setups(SPACE)
+    for j in rng.choice(len(grid), 12, replace=False):
+        seed_cover = reach(grid[j][None])[0]
+        g = S.gradient_descent(reach, grid[j], variant, SPACE, SAMP)
+        assert np.all(np.diff(g.path_scores) > 0)
+        assert g.covered.sum() >= seed_cover.sum()
+        np.testing.assert_array_equal(g.covered, reach(g.setup[None])[0])
+        # round 1 is conservative in every variant: its end covers the seed's patches
+        end1 = reach(g.round_ends[0][None])[0]
+        assert np.all(end1[seed_cover])
+        if variant.startswith("C_"):
+            assert np.all(g.covered[seed_cover])
+
+
+def test_absolute_round_reaches_a_local_maximum():
+    reach = S.CountingReach(toy_reach(n=80, seed=5))
+    g = S.gradient_descent(reach, np.array([0.0, 1.0, 0.0]), "CA_XY", SPACE, SAMP)
+    nb = S.neighbours(g.setup, (0, 1), S.gd_step(SAMP), SPACE)
+    assert reach(nb).sum(axis=1).max() <= g.covered.sum()
+
+
+def test_neighbours_wrap_alpha_and_stay_in_range():
+    step = S.gd_step(SAMP)
+    nb = S.neighbours(np.array([0.0, 1.0, 0.0]), (0, 1, 2), step, SPACE)
+    assert len(nb) == 4  # x-1 and y+1 are outside [0, 1]
+    assert np.all((nb[:, :2] >= 0) & (nb[:, :2] <= 1))
+    assert np.isclose(nb[:, 2].max(), 2 * math.pi - step[2])
+
+
+def test_uniform_sampling_counts_one_call_per_setup_and_removes_dominated():
+    res = S.uniform_sampling(toy_reach(), COARSE_SPACE)
+    grid = S.uniform_setups(COARSE_SPACE)
+    assert res.n_rfc == len(grid)
+    nd = res.nondominated_cover
+    for i in range(len(nd)):
+        for j in range(len(nd)):
+            if i != j:
+                assert not np.all(nd[j] <= nd[i])
+    np.testing.assert_array_equal(nd.any(axis=0), res.cover.any(axis=0))
+
+
+@pytest.mark.parametrize("variant", ["none", "CA_XY", "C_XYa"])
+def test_hierarchical_sampling_covers_target_and_is_deterministic(variant):
+    reach = toy_reach(n=60, seed=2)
+    target = S.uniform_sampling(reach, COARSE_SPACE).cover.any(axis=0)
+    a = S.hierarchical_sampling(reach, SPACE, SAMP, variant, target=target)
+    b = S.hierarchical_sampling(reach, SPACE, SAMP, variant, target=target)
+    assert a.covers_target == np.all(a.cover.any(axis=0)[target])
+    np.testing.assert_array_equal(a.setups, b.setups)
+    assert a.n_rfc == b.n_rfc and a.level == b.level
+    if variant == "none":
+        assert a.n_rfc == a.samples
+        level1 = len(S.uniform_setups(SPACE, S.hierarchy_resolution(
+            [SAMP.coarse_res_x, SAMP.coarse_res_y, SAMP.coarse_res_alpha], 1)))
+        assert a.level > 1 or a.n_rfc == level1
+
+
+@pytest.mark.parametrize("variant", ["none", "CA_XY"])
+def test_random_sampling_covers_target_deterministically(variant):
+    reach = toy_reach(n=60, seed=4)
+    grid = S.uniform_setups(SPACE)
+    look = S.lookup_reach(grid, reach(grid))
+    target = look(grid).any(axis=0)
+    a = S.random_sampling(look, SPACE, SAMP, variant, seed=7, target=target)
+    b = S.random_sampling(look, SPACE, SAMP, variant, seed=7, target=target)
+    c = S.random_sampling(look, SPACE, SAMP, variant, seed=8, target=target)
+    assert a.covers_target
+    np.testing.assert_array_equal(a.setups, b.setups)
+    assert a.n_rfc == b.n_rfc
+    assert not np.array_equal(a.seeds, c.seeds)
+    # the last seed completed the cover
+    assert a.n_rfc >= a.samples
+
+
+def test_random_sampling_off_grid():
+    reach = toy_reach(n=40, seed=6)
+    samp = dataclasses.replace(SAMP, random_on_grid=False, max_random_samples=500)
+    res = S.random_sampling(reach, SPACE, samp, "C_XY", seed=1)
+    assert res.samples <= 500
+    assert res.covers_target == bool(res.cover.any(axis=0).all())
