@@ -355,42 +355,34 @@ def plot_table1(summary: pd.DataFrame, paper: pd.DataFrame | None = None):
     return fig
 
 
-def plot_fig6(fig6: pd.DataFrame):
-    """Coverage and overlap per guard against P_g, guard counts above the points (MAVAC Fig. 6)."""
+def _plot_per_guard(df: pd.DataFrame, c_col: str, o_col: str, count_col: str, what: str):
+    """Coverage and overlap per guard (percent of |S|) against P_g, one panel per machine,
+    with the guard count written above each point."""
     import matplotlib.pyplot as plt
 
-    machines = list(dict.fromkeys(fig6["machine"]))
+    machines = list(dict.fromkeys(df["machine"]))
     fig, axes = plt.subplots(1, len(machines), figsize=(4.5 * len(machines), 3.8), squeeze=False)
     for ax, m in zip(axes[0], machines):
-        d = fig6[fig6["machine"] == m]
-        ax.plot(d["P_g"], 100 * d["C_per_guard"], "o-", color="tab:green", label="C per guard")
-        ax.plot(d["P_g"], 100 * d["O_per_guard"], "o-", color="tab:red", label="O per guard")
-        for x, y, n in zip(d["P_g"], 100 * d["C_per_guard"], d["guards"]):
+        d = df[df["machine"] == m]
+        ax.plot(d["P_g"], 100 * d[c_col], "o-", color="tab:green", label=f"C per {what}")
+        ax.plot(d["P_g"], 100 * d[o_col], "o-", color="tab:red", label=f"O per {what}")
+        for x, y, n in zip(d["P_g"], 100 * d[c_col].fillna(0), d[count_col]):
             ax.annotate(f"{n:.0f}", (x, y), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=8)
-        ax.set(xlabel="P_g", ylabel="% of |S| per guard", title=m)
+        ax.set(xlabel="P_g", ylabel=f"% of |S| per {what}", title=m)
         ax.grid(alpha=0.3)
         ax.legend()
     fig.tight_layout()
     return fig
+
+
+def plot_fig6(fig6: pd.DataFrame):
+    """Coverage and overlap per guard against P_g, guard counts above the points (MAVAC Fig. 6)."""
+    return _plot_per_guard(fig6, "C_per_guard", "O_per_guard", "guards", "guard")
 
 
 def plot_fig7(fig7: pd.DataFrame):
     """Coverage and overlap per NoS guard against P_g, NoS guard counts above (MAVAC Fig. 7)."""
-    import matplotlib.pyplot as plt
-
-    machines = list(dict.fromkeys(fig7["machine"]))
-    fig, axes = plt.subplots(1, len(machines), figsize=(4.5 * len(machines), 3.8), squeeze=False)
-    for ax, m in zip(axes[0], machines):
-        d = fig7[fig7["machine"] == m]
-        ax.plot(d["P_g"], 100 * d["C_per_nos_guard"], "o-", color="tab:green", label="C per NoS guard")
-        ax.plot(d["P_g"], 100 * d["O_per_nos_guard"], "o-", color="tab:red", label="O per NoS guard")
-        for x, y, n in zip(d["P_g"], 100 * d["C_per_nos_guard"].fillna(0), d["nos_guards"]):
-            ax.annotate(f"{n:.0f}", (x, y), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=8)
-        ax.set(xlabel="P_g", ylabel="% of |S| per NoS guard", title=m)
-        ax.grid(alpha=0.3)
-        ax.legend()
-    fig.tight_layout()
-    return fig
+    return _plot_per_guard(fig7, "C_per_nos_guard", "O_per_nos_guard", "nos_guards", "NoS guard")
 
 
 def _mesh_axes(mesh, elev=25, azim=-60):
