@@ -9,7 +9,7 @@ dataclass next to the others of its paper.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .validate import check_int, check_nonnegative, check_positive, check_range, check_unit
 
@@ -659,7 +659,6 @@ class InspectionParams:
 
 # ---- Kabir: plan_setups, the user-facing setup planner (owner: mavac/setups/plan.py) ----
 
-from dataclasses import field  # noqa: E402  (only this section needs it)
 
 
 @dataclass(frozen=True)
