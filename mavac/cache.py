@@ -1,8 +1,10 @@
 """On-disk cache for expensive stages (reachability maps, reach sweeps).
 
-Built on ``joblib.Memory``: the key is the function's code and its hashed arguments
-(robot name, parameter dataclasses, arrays), so a change of input or parameter recomputes.
-joblib recomputes an entry it cannot load, so a corrupt entry is never trusted.
+Callers wrap their function with ``memory().cache(fn, ignore=[...])``, leaving out of the key
+what does not change the result (worker counts) or hashes slowly (robot objects, which they
+replace by a kinematic fingerprint). The key is the function's code and its hashed
+arguments, so a change of input or parameter recomputes; joblib recomputes an entry it cannot
+load, so a corrupt entry is never trusted.
 """
 
 from __future__ import annotations
@@ -19,16 +21,3 @@ def memory():
 
     return Memory(cache_dir(), verbose=0)
 
-
-def cached(fn):
-    """Decorator: cache ``fn`` on disk; the wrapped function is created lazily on first call."""
-    state = {}
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        if "f" not in state:
-            state["f"] = memory().cache(fn)
-        return state["f"](*args, **kwargs)
-
-    wrapper.uncached = fn
-    return wrapper

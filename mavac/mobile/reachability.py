@@ -14,7 +14,7 @@ a *prefilter*: the final decision for a guard is always collision-free IK.
 
 The map is cached on disk under a key made of the robot's name, a kinematic fingerprint (joint
 types and placements, limits, frame placement) and the parameters. It uses the joblib ``Memory``
-behind :func:`mavac.cache.cached` directly, with the robot object left out of the hash: hashing a
+from :func:`mavac.cache.memory`, with the robot object left out of the hash: hashing a
 pinocchio model by pickling is slow and not stable, the fingerprint stands in for it.
 """
 
