@@ -15,8 +15,8 @@ import numpy as np
 
 def main() -> None:
     from mavac.geometry.machines import test_bench
-    from mavac.mobile.plan import plan_from_context, prepare_offline
-    from mavac.mobile.reachability import reachability_map
+    from mavac.inspection.plan import plan_from_context, prepare_offline
+    from mavac.inspection.reachability import reachability_map
     from mavac.params import InspectionParams
     from mavac.robots.models import ur10_mobile
     from mavac.vision.visibility import VisibilityScene, visible_from

@@ -19,7 +19,7 @@ import numpy as np
 from mavac.config import cache_dir, fast_or_full
 from mavac.params import SetupPlannerParams
 from mavac.setups.dominance import nondominated
-from mavac.setups.setcover import (
+from mavac.planning.setcover import (
     dfbnb_setup_cover,
     execution_time_area_passes,
     milp_setup_cover,

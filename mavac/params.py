@@ -53,7 +53,7 @@ class CameraParams:
         check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
 
 
-# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (owner: mavac/setups/lissajous.py, mavac/sim/scrub.py, mavac/setups/gpr.py) ----
+# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (owner: mavac/scrubbing/lissajous.py, mavac/sim/wear.py, mavac/scrubbing/gpr.py) ----
 
 # Order of the operation-parameter vector x used by the scrub model and the GPR learner
 # (Kabir, Sec. VIII: tool speed, normal force, stiffness, frequency, amplitude).
@@ -116,7 +116,7 @@ class LissajousParams:
 
 @dataclass(frozen=True)
 class ScrubModel:
-    """Constants of the SIMULATED scrubbing black box (``mavac.sim.scrub``), which stands in
+    """Constants of the SIMULATED scrubbing black box (``mavac.sim.wear``), which stands in
     for Kabir's physical cleaning experiments (Sec. IX-C). None of them is in the paper:
     they are round, physically plausible values for a sponge tool on a 7-DOF arm in
     Cartesian impedance mode, chosen so that C_p depends on all five operation parameters.
@@ -357,7 +357,7 @@ class SamplingParams:
         check_int("repetitions", self.repetitions, lo=1)
 
 
-# ---- Kabir: tool paths and ICP (owner: mavac/setups/toolpath.py, mavac/vision/icp.py) ----
+# ---- Kabir: tool paths and ICP (owner: mavac/scrubbing/toolpath.py, mavac/vision/icp.py) ----
 
 
 @dataclass(frozen=True)
@@ -420,7 +420,7 @@ class ICPParams:
         check_range("success_rotation_rad", self.success_rotation_rad, 0.0, math.pi, lo_open=True)
 
 
-# ---- Kabir: setup planner, DFBnB + IESS (owner: mavac/setups/setcover.py) ----
+# ---- Kabir: setup planner, DFBnB + IESS (owner: mavac/planning/setcover.py) ----
 
 
 @dataclass(frozen=True)
@@ -635,7 +635,7 @@ class NoSParams:
 
 @dataclass(frozen=True)
 class InspectionParams:
-    """Everything ``mavac.mobile.plan.plan_inspection`` needs (MAVAC offline computation)."""
+    """Everything ``mavac.inspection.plan.plan_inspection`` needs (MAVAC offline computation)."""
 
     # Ours: surface discretisation S, m (MAVAC discretises the surface into a point cloud;
     # dust heaps are 10 cm apart, S is twice as fine).

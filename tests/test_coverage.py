@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mavac.mobile.coverage import cover_counts, coverage_overlap
+from mavac.inspection.coverage import cover_counts, coverage_overlap
 
 
 def test_hand_made():

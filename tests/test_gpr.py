@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mavac.params import GPRParams
-from mavac.setups.gpr import (coarse_grid, dense_optimum, experiments_to_reach, learn_parameters,
+from mavac.scrubbing.gpr import (coarse_grid, dense_optimum, experiments_to_reach, learn_parameters,
                               objective, random_search)
 
 FAST = GPRParams(Cp_th=0.7, P_th=0.3, max_experiments=80, n_candidates=512, patience=30)

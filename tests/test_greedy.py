@@ -5,7 +5,7 @@ import itertools
 import numpy as np
 import pytest
 
-from mavac.mobile.greedy import greedy_scores, greedy_select
+from mavac.planning.greedy import greedy_scores, greedy_select
 
 
 def paper_greedy(sets, P, weights=None, k1=1.0, k2=1.0, n=None):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.mobile import guards as G
+from mavac.inspection import guards as G
 from mavac.params import CameraParams, GuardParams
 
 

@@ -7,7 +7,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from mavac.setups.iess import (
+from mavac.planning.iess import (
     initial_estimate_of_setup_size,
     n_repeat_for,
     n_repeat_for_all_q,

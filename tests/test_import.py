@@ -16,5 +16,5 @@ def test_import_mavac_is_light():
 
 def test_subpackages_and_params_are_light():
     stmt = ("import mavac.params, mavac.paper, mavac.config, mavac.geometry, mavac.robots, mavac.vision, "
-            "mavac.setups, mavac.mobile, mavac.planning, mavac.viz")
+            "mavac.setups, mavac.inspection, mavac.cleaning, mavac.scrubbing, mavac.sim, mavac.planning, mavac.viz")
     assert _imported_after(stmt) == []

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mavac.params import LissajousParams
-from mavac.setups.lissajous import lissajous_force, lissajous_offset, overlay_path
+from mavac.scrubbing.lissajous import lissajous_force, lissajous_offset, overlay_path
 
 
 def _spectrum_peak(signal, fs):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.mobile import nos
+from mavac.inspection import nos
 
 
 def _box_with_hole(hole_center_x=0.2):

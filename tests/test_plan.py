@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.mobile.plan import plan_from_context, plan_inspection, prepare_offline, short_open_path
+from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline, short_open_path
 from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams)
 
 FAST = InspectionParams(
@@ -58,7 +58,7 @@ def test_robot_without_camera_is_refused():
 
 
 def test_plan_end_to_end(plan, robot):
-    from mavac.mobile.spots import se2_matrices
+    from mavac.inspection.spots import se2_matrices
     from mavac.robots.kinematics import fk
 
     assert plan.n_spots >= 1 and plan.n_guards >= 1
@@ -81,7 +81,7 @@ def test_plan_end_to_end(plan, robot):
 
 
 def test_guard_configurations_are_collision_free(plan, ctx):
-    from mavac.mobile.spots import se2_matrices
+    from mavac.inspection.spots import se2_matrices
 
     for k, T in enumerate(se2_matrices(plan.spots)):
         ctx.checker.set_base(T)

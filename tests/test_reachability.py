@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mavac.mobile import reachability as R
+from mavac.inspection import reachability as R
 from mavac.params import ReachabilityMapParams
 
 SMALL = ReachabilityMapParams(voxel_size=0.1, n_directions=26, n_samples=20_000, n_rotations=32, seed=1)
@@ -48,7 +48,7 @@ def test_far_points_are_unreachable(rmap):
 
 
 def test_world_lookup_matches_base_lookup(rmap):
-    from mavac.mobile.spots import se2_matrices
+    from mavac.inspection.spots import se2_matrices
 
     T = se2_matrices(np.array([[1.0, -2.0, 0.7]]))[0]
     rng = np.random.default_rng(2)

@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mavac.params import SetupPlannerParams
-from mavac.setups.iess import n_repeat_recommended
-from mavac.setups.setcover import (
+from mavac.planning.iess import n_repeat_recommended
+from mavac.planning.setcover import (
     brute_force_setup_cover,
     cleaning_rate,
     dfbnb_setup_cover,

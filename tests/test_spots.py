@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.mobile import spots as SP
+from mavac.inspection import spots as SP
 from mavac.params import CameraParams, ReachabilityMapParams, SpotParams
 
 RECT = np.array([[-1.0, -0.5], [1.0, -0.5], [1.0, 0.5], [-1.0, 0.5]])
@@ -72,7 +72,7 @@ def test_collision_free_spots(box):
 
 
 def test_spot_visibility_and_accessibility(box):
-    from mavac.mobile.reachability import reachability_map
+    from mavac.inspection.reachability import reachability_map
     from mavac.robots.models import ur10_mobile
     from mavac.vision.visibility import VisibilityScene
 
@@ -91,7 +91,7 @@ def test_spot_visibility_and_accessibility(box):
 
 
 def test_guard_clearance(box):
-    from mavac.mobile.nos import raycasting_scene
+    from mavac.inspection.nos import raycasting_scene
 
     scene = raycasting_scene(box)
     pts = np.array([[0.0, -0.5, 0.4], [0.0, 0.0, 0.0]])

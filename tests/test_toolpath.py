@@ -6,7 +6,7 @@ import trimesh
 
 from mavac.geometry.parts import part_from_mesh
 from mavac.params import ToolpathParams
-from mavac.setups.toolpath import (
+from mavac.scrubbing.toolpath import (
     execution_time_fn,
     patches_for_pass,
     slice_curves,
@@ -170,7 +170,7 @@ def test_puma_ik_limits_the_path_to_what_the_arm_reaches():
     from mavac.robots.kinematics import ik_axis
     from mavac.robots.models import puma560
     from mavac.setups.reach import base_T_part
-    from mavac.setups.toolpath import reachable_from_robot
+    from mavac.scrubbing.toolpath import reachable_from_robot
 
     part = bowl_part()
     robot = puma560(ReachParams().tool_length)
@@ -225,7 +225,7 @@ def test_execution_time_is_contact_plus_reposition():
         exec_times(cover[:, :5], setups)
 
     # ... which the setup planner takes as its cost array (eq. 1: t_s + t_e).
-    from mavac.setups.setcover import setup_costs_from_times, solve_setup_cover
+    from mavac.planning.setcover import setup_costs_from_times, solve_setup_cover
 
     cand = np.array([passes == 1, passes == 2, np.ones(len(faces), bool)])
     costs = setup_costs_from_times(exec_times(cand, np.zeros((3, 3))), 60.0)
@@ -256,7 +256,7 @@ def test_bad_inputs_raise():
 
 
 def test_sweep_frame_keeps_strips_even_on_curved_stains_and_long_on_flat_ones():
-    from mavac.setups.toolpath import sweep_frame
+    from mavac.scrubbing.toolpath import sweep_frame
 
     flat = height_field()
     flat.vertices[:, 0] *= 1.5  # 0.3 m long in x, 0.2 m in y

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from ..params import ICPParams, LissajousParams, ScrubModel, SetupSpaceParams, ToolpathParams
-from ..setups.toolpath import ToolPath, reachable_from_robot, toolpath_for_setup
+from ..scrubbing.toolpath import ToolPath, reachable_from_robot, toolpath_for_setup
 
 
 # ---------------------------------------------------------------- setups and tool paths
@@ -71,7 +71,7 @@ def toolpath_table(part_name: str, toolpaths: list[ToolPath]) -> tuple[pd.DataFr
 
 def execution_time_models(part, patches, toolpaths: list[ToolPath]) -> pd.DataFrame:
     """t^e of each setup from its tool path against the planner's simple area model
-    (:func:`mavac.setups.setcover.execution_time_area_passes`) at the same sweep rate,
+    (:func:`mavac.planning.setcover.execution_time_area_passes`) at the same sweep rate,
     tool width x tool speed.
 
     Returns
@@ -79,7 +79,7 @@ def execution_time_models(part, patches, toolpaths: list[ToolPath]) -> pd.DataFr
     DataFrame
         ``setup, t_e_toolpath_s, t_contact_s, t_reposition_s, t_e_area_model_s, ratio``.
     """
-    from ..setups.setcover import execution_time_area_passes
+    from ..planning.setcover import execution_time_area_passes
 
     params = toolpaths[0].params
     cover = np.zeros((len(patches), len(part.stain_faces)), dtype=bool)
@@ -165,7 +165,7 @@ def stain_perception(part, rng: np.random.Generator, params: LissajousParams = L
     """One SIMULATED scrubbing pass seen by the camera, segmented like Kabir Sec. VII.
 
     The stain (per-face intensity, as thickness in layers) is rendered before and after
-    :func:`mavac.sim.scrub.scrub_faces`; one 2-cluster K-means gives both binary masks and
+    :func:`mavac.sim.wear.scrub_faces`; one 2-cluster K-means gives both binary masks and
     ``C_p`` over the stained region; ``N_c``-colour quantisation of the before image (3x3
     median filtered against pixel noise, as the binary masks are) gives the passes per pixel
     (Fig. 5), compared with the part's own passes (pixels of stained faces; the clean part
@@ -173,7 +173,7 @@ def stain_perception(part, rng: np.random.Generator, params: LissajousParams = L
     """
     import cv2
 
-    from ..sim.scrub import scrub_faces, stain_opacity
+    from ..sim.wear import scrub_faces, stain_opacity
     from ..vision.stain import (cleaning_performance, face_index_image, passes_from_image,
                                 render_stain_image, stain_masks_kmeans, view_of_faces)
 

@@ -4,7 +4,7 @@ Tables for ``notebooks/10_gpr_parameters.ipynb``: GPR and random search over see
 bowl (``C_p^th``, ``P_th`` of the paper's bowl) and the hull settings, the true optimum of
 the noise-free simulated model, learning curves and the paper-vs-ours table. The thresholds
 are read from ``data/paper_values.csv``. The cleaning physics is our simulated model
-(:mod:`mavac.sim.scrub`), so the learned parameters are not expected to match the paper's.
+(:mod:`mavac.sim.wear`), so the learned parameters are not expected to match the paper's.
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ import pandas as pd
 from mavac.paper import paper_scalar
 from mavac.params import OPERATION_PARAMS, GPRParams, ScrubModel
 from mavac.parallel import map_trials
-from mavac.setups.gpr import (dense_optimum, experiments_to_reach, learn_parameters, objective,
+from mavac.scrubbing.gpr import (dense_optimum, experiments_to_reach, learn_parameters, objective,
                               random_search)
-from mavac.sim.scrub import ScrubExperiment, stain_hardness
+from mavac.sim.wear import ScrubExperiment, stain_hardness
 
 PARTS = ("bowl", "hull")
 _REF = "Sec. IX-C GPR"
@@ -127,7 +127,7 @@ def learning_curves(histories: pd.DataFrame, parts=PARTS, cp_tol: float = 0.02) 
     """Best truly feasible objective found so far versus experiments, median over seeds.
 
     A point counts as feasible when the noise-free C_p meets the threshold up to ``cp_tol``
-    (the measurement noise, as in :func:`mavac.setups.gpr.experiments_to_reach`; evaluation
+    (the measurement noise, as in :func:`mavac.scrubbing.gpr.experiments_to_reach`; evaluation
     only, the learners see measured C_p). Before any feasible point a run scores 0 (the
     objective's floor); a run that stopped early keeps its final value, so every curve
     is a median over all seeds and never decreases.

@@ -4,7 +4,7 @@ Every function returns a pandas DataFrame (or arrays for a figure) so the notebo
 The uniform baseline sweep (Table II) is cached on disk; the sampling experiments (Tables III,
 IV, Figs. 7-8) answer grid setups from the baseline's cover matrix (:func:`lookup_reach`, the
 exact reach results) and compute off-grid setups with the reach test, counting n_rfc either
-way; the planner experiments (Tables V, VI) run the DFBnB of :mod:`mavac.setups.setcover`
+way; the planner experiments (Tables V, VI) run the DFBnB of :mod:`mavac.planning.setcover`
 beside its MILP certificate.
 """
 
@@ -22,12 +22,12 @@ from ..geometry.parts import load_part
 from ..params import ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
 from ..parallel import map_trials
 from ..setups.dominance import nondominated
-from ..setups.iess import n_repeat_for, p_find_min_cover
+from ..planning.iess import n_repeat_for, p_find_min_cover
 from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
                             reach_targets_from_part)
 from ..setups.sampling import (VARIANTS, gradient_descent, hierarchical_sampling, random_sampling,
                                uniform_setups, variant_plan)
-from ..setups.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_setup_cover,
+from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_setup_cover,
                                setup_costs_from_times)
 
 #: Kabir Fig. 6 / Tables II-VI objects, in the paper's order.

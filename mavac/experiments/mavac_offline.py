@@ -47,8 +47,8 @@ def _with(params: InspectionParams, seed=None, P_s=None, P_g=None) -> Inspection
 def _table1_trial(args) -> list[dict]:
     """One trial: sample S and jitter the candidates with ``seed``, then select for every P_s."""
     from ..geometry.machines import load_machine
-    from ..mobile.plan import prepare_offline
-    from ..mobile.spots import select_spots
+    from ..inspection.plan import prepare_offline
+    from ..inspection.spots import select_spots
 
     machine, seed, P_s_values, params = args
     ctx = prepare_offline(load_machine(machine), params=_with(params, seed=seed))
@@ -102,8 +102,8 @@ def table1_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
 def _guard_sweep_trial(args) -> list[dict]:
     """One machine and seed: prepare once, then plan for every P_g (spots fixed by P_s)."""
     from ..geometry.machines import load_machine
-    from ..mobile.coverage import coverage_overlap
-    from ..mobile.plan import plan_from_context, prepare_offline
+    from ..inspection.coverage import coverage_overlap
+    from ..inspection.plan import plan_from_context, prepare_offline
 
     machine, seed, P_g_values, P_s, params = args
     base = _with(params, seed=seed, P_s=P_s)
@@ -195,8 +195,8 @@ def _guard_poses(machine: str, n_poses: int, P_s: float, params: InspectionParam
     """Prepared context and at most ``n_poses`` feasible guard camera poses (m, 4, 4) of the
     spots selected with ``P_s``, subsampled with ``params.seed``."""
     from ..geometry.machines import load_machine
-    from ..mobile.plan import prepare_offline
-    from ..mobile.spots import select_spots
+    from ..inspection.plan import prepare_offline
+    from ..inspection.spots import select_spots
 
     ctx = prepare_offline(load_machine(machine), params=_with(params, P_s=P_s))
     sel = select_spots(ctx.accessible, ctx.candidates, P_s)
@@ -315,9 +315,9 @@ def plot_hpr_radius(sweep: pd.DataFrame):
 
 
 def plan_machine(machine: str, params: InspectionParams | None = None, progress: bool = False):
-    """:func:`mavac.mobile.plan.plan_inspection` on one of the package's machines."""
+    """:func:`mavac.inspection.plan.plan_inspection` on one of the package's machines."""
     from ..geometry.machines import load_machine
-    from ..mobile.plan import plan_inspection
+    from ..inspection.plan import plan_inspection
 
     return plan_inspection(load_machine(machine), params=params, progress=progress)
 
@@ -449,7 +449,7 @@ def plot_spots(ctx, P_s_values=(0.02, 0.15)):
     on the floor around the machine footprint."""
     import matplotlib.pyplot as plt
 
-    from ..mobile.spots import select_spots
+    from ..inspection.spots import select_spots
 
     fig, axes = plt.subplots(1, len(P_s_values), figsize=(5 * len(P_s_values), 4.2), squeeze=False)
     fp = np.vstack([ctx.machine.footprint, ctx.machine.footprint[:1]])

@@ -1,2 +1,4 @@
-"""Motion planning: RRT-Connect (OMPL) in a box of joint space with a Python validity checker
-(:func:`mavac.planning.rrt.plan_rrt_connect`). OMPL is imported inside the function."""
+"""Planning algorithms shared by both papers: RRT-Connect through OMPL (``rrt``), the
+three-step greedy selection of spots and guards (``greedy``), and weighted set cover by
+depth-first branch and bound with an integer-programming certificate (``setcover``, ``iess``).
+OMPL is imported inside the function that needs it."""

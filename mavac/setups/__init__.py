@@ -1,1 +1,4 @@
-"""Kabir et al. (T-ASE 2017): setup planning, tool paths, Lissajous scrubbing, GPR parameter learning."""
+"""Kabir et al. setup planning: reach test and n_rfc (``reach``), uniform / hierarchical /
+random sampling with gradient descent (``sampling``), dominance (``dominance``) and
+:func:`mavac.setups.plan.plan_setups`. The set-cover search itself is generic and lives in
+:mod:`mavac.planning.setcover`."""

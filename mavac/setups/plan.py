@@ -18,7 +18,7 @@ import numpy as np
 from ..params import SetupPlanParams
 from .reach import CountingReach, PartReach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
-from .setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
+from ..planning.setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
 
 
 @dataclass

@@ -1,1 +1,3 @@
-"""Simulation: worlds, controllers and simulated cleaning models (dust, scrubbing)."""
+"""Simulation shared by both papers: pybullet worlds, controllers, and the simulated dust and
+wear models (``wear``: Preston-law stain removal). Everything here is simulated, not the papers'
+physics."""

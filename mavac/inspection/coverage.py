@@ -1,0 +1,57 @@
+"""Coverage C and overlap O of a pose set (MAVAC eq. 1-2), as fractions of |S|.
+
+``C_g`` is the union of the elements covered by every pose; ``O_g`` is the union of the pairwise
+intersections, i.e. the elements covered at least twice. The paper reports ``|C_g| / |S|`` and
+``|O_g| / |S|`` (Results, "Offline computation").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _as_visibility(visible) -> np.ndarray:
+    v = np.asarray(visible, dtype=bool)
+    if v.ndim == 1:
+        v = v[None, :]
+    if v.ndim != 2:
+        raise ValueError(f"visible must be a (poses, elements) bool array, got shape {v.shape}")
+    return v
+
+
+def cover_counts(visible) -> np.ndarray:
+    """How many poses cover each element.
+
+    Parameters
+    ----------
+    visible : (h, n) bool
+        ``visible[i, j]``: pose i covers element j (``cover(S, Gm_i)`` of eq. 1).
+
+    Returns
+    -------
+    (n,) int
+    """
+    return _as_visibility(visible).sum(axis=0).astype(np.int64)
+
+
+def coverage_overlap(visible, n_elements: int | None = None) -> tuple[float, float]:
+    """C and O of eq. 1-2 as fractions of |S|.
+
+    Parameters
+    ----------
+    visible : (h, n) bool
+        Cover sets of the h poses over the n elements of S (h may be 0).
+    n_elements : int, optional
+        |S|; defaults to ``visible.shape[1]``.
+
+    Returns
+    -------
+    (C, O) : floats in [0, 1]
+        Fraction of S covered at least once, and at least twice.
+    """
+    v = _as_visibility(visible)
+    n = v.shape[1] if n_elements is None else int(n_elements)
+    if n <= 0:
+        raise ValueError(f"n_elements must be positive, got {n}")
+    counts = v.sum(axis=0)
+    return float(np.count_nonzero(counts >= 1)) / n, float(np.count_nonzero(counts >= 2)) / n
