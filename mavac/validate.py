@@ -58,6 +58,19 @@ def check_points(name: str, array, dim: int = 3) -> np.ndarray:
     return a
 
 
+def check_cover(cover) -> np.ndarray:
+    """A 2-D ``(m, n)`` boolean cover matrix (``cover[j, i]``: setup j reaches patch i);
+    0/1 integers are accepted and converted."""
+    c = np.asarray(cover)
+    if c.ndim != 2:
+        raise ValueError(f"cover must be a 2-D (m, n) boolean array, got shape {c.shape}")
+    if c.dtype != bool:
+        if not np.all((c == 0) | (c == 1)):
+            raise ValueError("cover must be boolean (or 0/1)")
+        c = c.astype(bool)
+    return c
+
+
 def check_bounds(name: str, lower, upper):
     """Elementwise ``lower <= upper`` for parameter boxes; returns float arrays."""
     lo = np.asarray(lower, dtype=float)

@@ -15,9 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.transforms import compose, points_in_frame, vectors_in_frame
 from ..params import CameraParams, GuardParams
-from ..validate import check_points, check_positive
 from ..planning.greedy import GreedyResult, greedy_select
+from ..validate import check_points, check_positive
 from .reachability import OPTICAL_AXIS
 
 # Random IK restarts per target after the first attempt from the home configuration (ours:
@@ -144,11 +145,9 @@ def camera_configurations(robot, checker, world_T_base, positions, axes, rng, q0
     from ..robots.kinematics import ik_axis
 
     T = np.asarray(world_T_base, dtype=float)
-    R, t = T[:3, :3], T[:3, 3]
-    k = len(positions)
-    if k == 0:
+    if len(positions) == 0:
         return np.zeros(0, dtype=bool), np.zeros((0, robot.nq)), 0
-    res = ik_axis(robot, (positions - t) @ R, axes @ R, frame=robot.camera_frame, frame_axis=OPTICAL_AXIS,
+    res = ik_axis(robot, points_in_frame(T, positions), vectors_in_frame(T, axes), frame=robot.camera_frame, frame_axis=OPTICAL_AXIS,
                   q0=robot.q_home if q0 is None else q0, rng=rng, n_restarts=IK_RESTARTS)
     ok = res.success.copy()
     checker.set_base(T)
@@ -185,7 +184,7 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
     if len(q) == 0:
         return GuardCandidates(np.zeros(0, dtype=np.int64), np.zeros((0, robot.nq)), np.zeros((0, 4, 4)),
                                np.zeros(0), np.zeros((0, n), dtype=bool), len(targets), n_ik)
-    world_T_camera = np.asarray(world_T_base) @ fk(robot, q, robot.camera_frame)
+    world_T_camera = compose(world_T_base, fk(robot, q, robot.camera_frame))
     im = np.asarray(maneuverability(robot, q), dtype=float).reshape(-1)
     return GuardCandidates(targets[ok], q, world_T_camera, im, fov_masks(points, world_T_camera, camera),
                            len(targets), n_ik)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.transforms import points_in_frame, vectors_in_frame
 from ..params import ReachabilityMapParams
 from ..validate import check_points
 from .nos import sphere_directions
@@ -106,10 +107,8 @@ class ReachabilityMap:
 
     def is_reachable_from(self, world_T_base, points_world, axes_world) -> np.ndarray:
         """:meth:`is_reachable` for world-frame targets and a base pose ``world_T_base`` (4, 4)."""
-        T = np.asarray(world_T_base, dtype=float)
-        R, t = T[:3, :3], T[:3, 3]
-        p = (check_points("points_world", points_world) - t) @ R
-        a = check_points("axes_world", axes_world) @ R
+        p = points_in_frame(world_T_base, check_points("points_world", points_world))
+        a = vectors_in_frame(world_T_base, check_points("axes_world", axes_world))
         return self.is_reachable(p, a)
 
 

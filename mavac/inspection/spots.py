@@ -24,10 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.transforms import se2_matrices
 from ..params import CameraParams, SpotParams
+from ..planning.greedy import GreedyResult, greedy_select
 from ..validate import check_points
 from .coverage import coverage_overlap
-from ..planning.greedy import GreedyResult, greedy_select
 
 
 def _ring(footprint: np.ndarray, distance: float, step: float) -> tuple[np.ndarray, np.ndarray]:
@@ -118,16 +119,6 @@ def candidate_spots(footprint, params: SpotParams, rng: np.random.Generator) -> 
     poses[:, 2] += rng.uniform(-params.jitter_theta, params.jitter_theta, size=len(poses))
     poses[:, 2] = np.angle(np.exp(1j * poses[:, 2]))
     return poses
-
-
-def se2_matrices(poses) -> np.ndarray:
-    """``world_T_base`` (m, 4, 4) from SE(2) poses ``(x, y, theta)`` (m, 3)."""
-    p = check_points("poses", poses)
-    T = np.tile(np.eye(4), (len(p), 1, 1))
-    c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-    T[:, 0, 0], T[:, 0, 1], T[:, 1, 0], T[:, 1, 1] = c, -s, s, c
-    T[:, :2, 3] = p[:, :2]
-    return T
 
 
 def collision_free_spots(robot, mesh, poses, margin: float = 0.0) -> np.ndarray:

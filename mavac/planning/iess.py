@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from ..validate import check_int, check_range
+from ..validate import check_cover, check_int, check_range
 
 
 def _check_prob(prob) -> float:
@@ -144,13 +144,11 @@ def initial_estimate_of_setup_size(
     from the whole ``S``, so ``psi`` is reset at every trial here. A trial stops early as soon
     as it can no longer beat the current minimum, which does not change ``min(N)``.
     """
-    c = np.asarray(cover, dtype=bool)
-    if c.ndim != 2:
-        raise ValueError(f"cover must be a 2-D (m, n) boolean array, got shape {c.shape}")
+    c = check_cover(cover)
     n_repeat = check_int("n_repeat", n_repeat, 1)
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     m = c.shape[0]
-    masks = _row_bitsets(c)
+    masks = row_bitsets(c)
     target = 0
     for b in masks:
         target |= b
@@ -172,7 +170,7 @@ def initial_estimate_of_setup_size(
     return best
 
 
-def _row_bitsets(cover: np.ndarray) -> list[int]:
+def row_bitsets(cover: np.ndarray) -> list[int]:
     """Each row of a boolean matrix as a Python int (bit i = column i)."""
     packed = np.packbits(cover, axis=1, bitorder="little")
     return [int.from_bytes(row.tobytes(), "little") for row in packed]

@@ -30,7 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..params import SetupPlannerParams
-from .iess import initial_estimate_of_setup_size, n_repeat_recommended
+from ..validate import check_cover
+from .iess import initial_estimate_of_setup_size, n_repeat_recommended, row_bitsets
 
 # Above this many random trials the Section IX-B choice of N_repeat is refused unless T_max
 # bounds the run (C(m, m/2) grows like 2^m: m = 30 already needs ~3.6e8 trials).
@@ -61,7 +62,7 @@ def execution_time_area_passes(cover, patch_area, passes, rate: float) -> np.nda
     -------
     (m,) float, s
     """
-    c = _check_cover(cover)
+    c = check_cover(cover)
     area = _check_patch_vector("patch_area", patch_area, c.shape[1])
     n_pass = _check_patch_vector("passes", passes, c.shape[1])
     if np.any(n_pass < 1):
@@ -104,7 +105,7 @@ def cleaning_rate(cover, setup_costs, patch_area=None, remaining=None) -> np.nda
     remaining : (n,) bool, optional
         ``P_r``; all patches when omitted.
     """
-    c = _check_cover(cover)
+    c = check_cover(cover)
     costs = _check_costs(setup_costs, c.shape[0])
     area = _area_or_ones(patch_area, c.shape[1])
     if remaining is not None:
@@ -126,7 +127,7 @@ def execution_order(cover, setup_costs, chosen, patch_area=None) -> np.ndarray:
     (k,) int
         ``chosen`` reordered.
     """
-    c = _check_cover(cover)
+    c = check_cover(cover)
     costs = _check_costs(setup_costs, c.shape[0])
     area = _area_or_ones(patch_area, c.shape[1])
     left = sorted(int(j) for j in np.asarray(chosen, dtype=np.int64).ravel())
@@ -143,17 +144,6 @@ def execution_order(cover, setup_costs, chosen, patch_area=None) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------
 # Input checks and the compressed bitset form
-
-
-def _check_cover(cover) -> np.ndarray:
-    c = np.asarray(cover)
-    if c.ndim != 2:
-        raise ValueError(f"cover must be a 2-D (m, n) boolean array, got shape {c.shape}")
-    if c.dtype != bool:
-        if c.size and not np.all((c == 0) | (c == 1)):
-            raise ValueError("cover must be boolean (or 0/1)")
-        c = c.astype(bool)
-    return c
 
 
 def _check_costs(setup_costs, m: int) -> np.ndarray:
@@ -203,8 +193,7 @@ def _compress(cover: np.ndarray, area: np.ndarray) -> _Compressed:
     rank[order] = np.arange(len(order))
     group_area = np.bincount(rank[inverse.ravel()], weights=area[coverable], minlength=len(order))
     ccover = np.ascontiguousarray(uniq[order].T)
-    packed = np.packbits(ccover, axis=1, bitorder="little")
-    masks = [int.from_bytes(row.tobytes(), "little") for row in packed]
+    masks = row_bitsets(ccover)
     groups_setups = [np.flatnonzero(ccover[:, g]).tolist() for g in range(ccover.shape[1])]
     return _Compressed(ccover, group_area, masks, groups_setups, uncoverable)
 
@@ -293,7 +282,7 @@ def dfbnb_setup_cover(cover, setup_costs, patch_area=None,
     """
     params = SetupPlannerParams() if params is None else params
     t0 = time.perf_counter()
-    c = _check_cover(cover)
+    c = check_cover(cover)
     m, n = c.shape
     costs = _check_costs(setup_costs, m)
     area = _area_or_ones(patch_area, n)
@@ -429,7 +418,7 @@ def milp_setup_cover(cover, setup_costs, time_limit: float | None = None) -> Mil
     from scipy.sparse import csr_array
 
     t0 = time.perf_counter()
-    c = _check_cover(cover)
+    c = check_cover(cover)
     m, n = c.shape
     costs = _check_costs(setup_costs, m)
     if time_limit is not None and not (time_limit > 0):
@@ -471,7 +460,7 @@ def brute_force_setup_cover(cover, setup_costs, max_size: int | None = None):
     cost : float
         ``inf`` when no subset within ``max_size`` covers.
     """
-    c = _check_cover(cover)
+    c = check_cover(cover)
     m, n = c.shape
     if m > 20:
         raise ValueError(f"cover: brute force is limited to m <= 20 setups, got {m}")
@@ -585,7 +574,7 @@ def solve_setup_cover(cover, setup_costs, patch_area=None,
     params = SetupPlannerParams() if params is None else params
     if method not in ("milp", "dfbnb", "both"):
         raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {method!r}")
-    c = _check_cover(cover)
+    c = check_cover(cover)
     m, n = c.shape
     costs = _check_costs(setup_costs, m)
     area = _area_or_ones(patch_area, n)

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 import trimesh
 
+from ..geometry.transforms import check_transform
 from ..validate import check_nonnegative
 from .kinematics import _check_q
 
@@ -21,18 +22,6 @@ _OBSTACLE = "obstacle"
 _FLOOR = "floor"
 # Floor slab: wide enough for any cell, thick enough that nothing tunnels through it.
 _FLOOR_SIZE = (100.0, 100.0, 1.0)
-
-
-def _check_pose(name: str, T) -> np.ndarray:
-    a = np.asarray(T, dtype=float)
-    if a.shape != (4, 4):
-        raise ValueError(f"{name} must have shape (4, 4), got {np.shape(T)}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} contains NaN or infinite values")
-    R = a[:3, :3]
-    if np.max(np.abs(R @ R.T - np.eye(3))) > 1e-6 or np.linalg.det(R) < 0 or not np.allclose(a[3], [0, 0, 0, 1]):
-        raise ValueError(f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
-    return a
 
 
 def bvh_from_mesh(mesh: trimesh.Trimesh) -> coal.BVHModelOBBRSS:
@@ -109,7 +98,7 @@ class CollisionChecker:
 
     def set_base(self, world_T_base) -> None:
         """Move the robot base to ``world_T_base`` (4, 4) (i.e. move the world under it)."""
-        world_T_base = _check_pose("world_T_base", world_T_base)
+        world_T_base = check_transform("world_T_base", world_T_base)
         self.world_T_base = world_T_base
         base_T_world = np.linalg.inv(world_T_base)
         for gid, world_T_obj in self._world_ids:

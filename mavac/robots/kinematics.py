@@ -20,7 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..validate import check_int, check_positive
+from ..geometry.transforms import check_transforms
+from ..tolerances import IK_POSITION_TOL, IK_ROTATION_TOL
+from ..validate import check_int, check_points, check_positive
 
 _AXES = {"RX": (1.0, 0.0, 0.0), "RY": (0.0, 1.0, 0.0), "RZ": (0.0, 0.0, 1.0)}
 _TWO_PI = 2.0 * np.pi
@@ -71,17 +73,6 @@ def _check_frame(robot, frame) -> str:
         names = [f.name for f in robot.model.frames]
         raise ValueError(f"frame must be a frame of {robot.name} (one of {names}), got {frame!r}")
     return frame
-
-
-def _check_vectors(name, v) -> np.ndarray:
-    a = np.asarray(v, dtype=float)
-    if a.ndim == 1 and a.shape[0] == 3:
-        a = a[None, :]
-    if a.ndim != 2 or a.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (n, 3), got {np.shape(v)}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} contains NaN or infinite values")
-    return a
 
 
 def _check_q0(robot, q0, n) -> np.ndarray:
@@ -433,7 +424,7 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
 
 def ik(
     robot, base_T_target, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
-    max_iter: int = 50, n_restarts: int = 12, pos_tol: float = 1e-5, rot_tol: float = 1e-4,
+    max_iter: int = 50, n_restarts: int = 12, pos_tol: float = IK_POSITION_TOL, rot_tol: float = IK_ROTATION_TOL,
     damping: float = 1e-6, max_step: float = 1.0,
 ) -> IKResult:
     """Full-pose inverse kinematics, batched damped least squares with random restarts.
@@ -464,16 +455,8 @@ def ik(
     -------
     IKResult
     """
-    T = np.asarray(base_T_target, dtype=float)
-    if T.ndim == 2:
-        T = T[None]
-    if T.ndim != 3 or T.shape[1:] != (4, 4):
-        raise ValueError(f"base_T_target must have shape (n, 4, 4), got {np.shape(base_T_target)}")
-    if not np.all(np.isfinite(T)):
-        raise ValueError("base_T_target contains NaN or infinite values")
+    T = check_transforms("base_T_target", base_T_target)
     R = T[:, :3, :3]
-    if np.max(np.abs(R @ R.transpose(0, 2, 1) - np.eye(3)), initial=0.0) > 1e-6:
-        raise ValueError("base_T_target rotations must be orthonormal")
     frame = _check_frame(robot, frame)
     return _solve_batched(robot, frame, T[:, :3, 3].copy(), R.copy(), "pose", q0, rng,
                           max_iter, n_restarts, pos_tol, rot_tol, damping, max_step)
@@ -481,8 +464,8 @@ def ik(
 
 def ik_axis(
     robot, positions, axes, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
-    method: str = "auto", max_iter: int = 50, n_restarts: int = 12, pos_tol: float = 1e-5,
-    rot_tol: float = 1e-4, damping: float = 1e-6, max_step: float = 1.0, frame_axis: int = 2,
+    method: str = "auto", max_iter: int = 50, n_restarts: int = 12, pos_tol: float = IK_POSITION_TOL,
+    rot_tol: float = IK_ROTATION_TOL, damping: float = 1e-6, max_step: float = 1.0, frame_axis: int = 2,
 ) -> IKResult:
     """Inverse kinematics for a position and a tool axis (free rotation about the axis).
 
@@ -512,8 +495,8 @@ def ik_axis(
     -------
     IKResult
     """
-    p = _check_vectors("positions", positions)
-    a = _check_vectors("axes", axes)
+    p = check_points("positions", positions)
+    a = check_points("axes", axes)
     if p.shape[0] != a.shape[0]:
         raise ValueError(f"positions and axes must have the same length, got {p.shape[0]} and {a.shape[0]}")
     norm = np.linalg.norm(a, axis=1)
@@ -526,7 +509,7 @@ def ik_axis(
     if method not in ("auto", "closed_form", "dls"):
         raise ValueError(f"method must be 'auto', 'closed_form' or 'dls', got {method!r}")
     frame_axis = check_int("frame_axis", frame_axis, 0, 2)
-    closed = _closed_form_params(robot, frame) if frame_axis == 2 else None
+    closed = puma_dh_constants(robot, frame) if frame_axis == 2 else None
     if method == "closed_form" and closed is None:
         raise ValueError(
             f"method='closed_form' needs a Puma-type DH robot and a flange-axis frame, got {robot.name}/{frame}"
@@ -545,14 +528,26 @@ def ik_axis(
 _PUMA_ALPHA = np.array([np.pi / 2, 0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, 0.0])
 
 
-def _closed_form_params(robot, frame):
-    """DH constants for the closed form, or None when it does not apply."""
+def is_puma_dh(dh) -> bool:
+    """Whether a standard DH table ``(a, d, alpha)`` (6, 3) is Puma-type: the Puma 560's alpha
+    pattern, a spherical wrist (``a4 = a5 = a6 = d5 = 0``) and ``a1 = 0``."""
+    if dh is None or np.shape(dh) != (6, 3) or not np.allclose(dh[:, 2], _PUMA_ALPHA):
+        return False
+    a, d = dh[:, 0], dh[:, 1]
+    return bool(a[0] == 0 and a[3] == 0 and a[4] == 0 and a[5] == 0 and d[4] == 0)
+
+
+def puma_dh_constants(robot, frame: str) -> dict | None:
+    """Constants of the closed-form axis IK for ``frame``, or None when it does not apply.
+
+    Applies when ``robot.dh`` :func:`is_puma_dh` and ``frame`` sits on the flange axis (z6)
+    with its z along it. Keys (m): ``d1, a2, d_off (= d2 + d3), a3, d4`` and ``reach``, the
+    distance from the wrist centre to the frame origin along z6.
+    """
     dh = getattr(robot, "dh", None)
-    if dh is None or dh.shape != (6, 3) or not np.allclose(dh[:, 2], _PUMA_ALPHA):
+    if not is_puma_dh(dh):
         return None
     a, d = dh[:, 0], dh[:, 1]
-    if not (a[0] == 0 and a[3] == 0 and a[4] == 0 and a[5] == 0 and d[4] == 0):
-        return None
     chain = _chain(robot, frame)
     if len(chain["idx"]) != 6 or not np.allclose(chain["p_f"][:2], 0.0):
         return None

@@ -1,6 +1,6 @@
 """Robot models used by both papers, built as pinocchio models with coal collision geometry.
 
-* ``ur10_mobile``: stand-in for MAVAC's Doosan M1013 on a MiR200 (see DESIGN.md, Stand-ins):
+* ``ur10_mobile``: stand-in for MAVAC's Doosan M1013 on a MiR200 (README, "Stand-ins"):
   the UR10 of example-robot-data mounted at the centre of the top of a MiR200-sized box,
   carrying the vacuum tool (tube + sphere) and an Azure Kinect on the flange.
 * ``puma560``: Kabir et al.'s simulated Puma 560, built from Corke's standard DH table.
@@ -19,7 +19,9 @@ import example_robot_data
 import numpy as np
 import pinocchio as pin
 
-from ..validate import check_nonnegative, check_range
+from ..geometry.transforms import se2_to_matrix  # noqa: F401  (re-exported: world_T_base of a spot)
+from ..validate import check_nonnegative
+from .kinematics import estimate_manipulability_max
 
 # MiR200 footprint and deck height (MiR200 datasheet: 890 x 580 mm, 352 mm high); MAVAC,
 # "Experimental setup": the arm is mounted at the centre of the MiR200.
@@ -118,17 +120,6 @@ class RobotModel:
         return np.array(self.model.upperPositionLimit, dtype=float)
 
 
-def se2_to_matrix(x: float, y: float, theta: float) -> np.ndarray:
-    """Planar base pose ``(x, y, theta)`` (m, m, rad) -> ``world_T_base`` (4, 4)."""
-    for name, v in (("x", x), ("y", y), ("theta", theta)):
-        check_range(name, v)
-    c, s = np.cos(theta), np.sin(theta)
-    T = np.eye(4)
-    T[:2, :2] = [[c, -s], [s, c]]
-    T[:2, 3] = [x, y]
-    return T
-
-
 def _translation(x=0.0, y=0.0, z=0.0) -> pin.SE3:
     return pin.SE3(np.eye(3), np.array([x, y, z], dtype=float))
 
@@ -149,8 +140,6 @@ _MANIPULABILITY_MAX: dict = {}  # per builder call: the estimate is deterministi
 
 def _finish(robot: RobotModel, builder: str, kwargs: dict) -> RobotModel:
     """Attach the manipulability normaliser (estimated once per process) and the pickling key."""
-    from .kinematics import estimate_manipulability_max
-
     key = (builder, tuple(sorted(kwargs.items())))
     if key not in _MANIPULABILITY_MAX:
         _MANIPULABILITY_MAX[key] = estimate_manipulability_max(robot)

@@ -44,6 +44,7 @@ import trimesh
 from scipy.interpolate import make_splprep
 from scipy.spatial import cKDTree
 
+from ..geometry.transforms import check_transform, rotate_vectors, transform_points
 from ..params import SetupSpaceParams, ToolpathParams
 from ..validate import check_int, check_points
 
@@ -202,8 +203,8 @@ def reachable_from_robot(robot, world_T_base=None, frame: str | None = None) -> 
     def reachable(positions: np.ndarray, axes: np.ndarray) -> np.ndarray:
         if len(positions) == 0:
             return np.zeros(0, dtype=bool)
-        p = positions @ base_T_world[:3, :3].T + base_T_world[:3, 3]
-        a = axes @ base_T_world[:3, :3].T
+        p = transform_points(base_T_world, positions)
+        a = rotate_vectors(base_T_world, axes)
         return np.asarray(ik_axis(robot, p, a, frame=frame).success, dtype=bool)
 
     return reachable
@@ -526,9 +527,7 @@ def toolpath_for_setup(part, world_T_part, patch_ids, params: ToolpathParams = T
     ToolPath
         One :class:`PassPath` per pass 1 .. max passes of the setup's patches.
     """
-    T = np.asarray(world_T_part, dtype=float)
-    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
-        raise ValueError(f"world_T_part must be a finite (4, 4) transform, got shape {T.shape}")
+    T = check_transform("world_T_part", world_T_part)
     stain_faces = np.asarray(part.stain_faces, dtype=np.int64)
     passes = np.asarray(part.passes, dtype=np.int64)
     ids = np.asarray(patch_ids)

@@ -10,21 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validate import check_cover
+
 # Memory cap (uint64 words) of one block of pairwise subset tests.
 _BLOCK_WORDS = 1 << 22
 # Word-by-word refutation rounds before the remaining pairs are tested on all words.
 _PAIR_ROUNDS = 6
-
-
-def _check_cover(cover) -> np.ndarray:
-    c = np.asarray(cover)
-    if c.ndim != 2:
-        raise ValueError(f"cover must be a 2-D (m, n) boolean array, got shape {c.shape}")
-    if c.dtype != bool:
-        if not np.all((c == 0) | (c == 1)):
-            raise ValueError("cover must be boolean (or 0/1)")
-        c = c.astype(bool)
-    return c
 
 
 def pack_rows(cover) -> np.ndarray:
@@ -40,7 +31,7 @@ def pack_rows(cover) -> np.ndarray:
     (m, ceil(n / 64)) uint64
         Row j holds the bits of ``cover[j]`` (zero padded).
     """
-    c = _check_cover(cover)
+    c = check_cover(cover)
     m, n = c.shape
     n_words = max(1, -(-n // 64))
     packed = np.zeros((m, n_words * 8), dtype=np.uint8)

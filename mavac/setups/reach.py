@@ -40,12 +40,11 @@ from typing import Callable
 
 import numpy as np
 
+from ..geometry.transforms import se2_matrices
 from ..params import ReachParams, SetupSpaceParams
-from ..robots.kinematics import ik_axis
+from ..robots.kinematics import ik_axis, puma_dh_constants
+from ..tolerances import SETUP_KEY_QUANTUM, TARGET_DECIMALS
 from ..validate import check_int, check_points
-
-_KEY_QUANTUM = 1e-7  # setups closer than this (m or rad) are the same setup
-_TARGET_DECIMALS = 9  # (vertex, normal) pairs equal to 1e-9 are one target
 
 
 # ---------------------------------------------------------------- targets and placement
@@ -104,7 +103,7 @@ def reach_targets(patch_vertices, patch_normals) -> ReachTargets:
     if n == 0:
         return ReachTargets(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
     rows = np.concatenate([v.reshape(-1, 3), np.repeat(nrm, 3, axis=0)], axis=1)
-    keys = np.round(rows, _TARGET_DECIMALS) + 0.0  # +0.0 folds -0.0 into 0.0
+    keys = np.round(rows, TARGET_DECIMALS) + 0.0  # +0.0 folds -0.0 into 0.0
     _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     return ReachTargets(positions=rows[first, :3].copy(), axes=-rows[first, 3:].copy(),
                         patch_targets=inverse.reshape(n, 3).astype(np.int64))
@@ -128,12 +127,7 @@ def base_T_part(setups, space: SetupSpaceParams) -> np.ndarray:
     (k, 4, 4) float: ``Trans(origin_x + x, origin_y + y, table_z) @ Rz(alpha)``.
     """
     s = check_points("setups", setups, 3)
-    T = np.zeros((len(s), 4, 4))
-    c, sn = np.cos(s[:, 2]), np.sin(s[:, 2])
-    T[:, 0, 0], T[:, 0, 1], T[:, 1, 0], T[:, 1, 1] = c, -sn, sn, c
-    T[:, 2, 2] = T[:, 3, 3] = 1.0
-    T[:, 0, 3] = space.origin_x + s[:, 0]
-    T[:, 1, 3] = space.origin_y + s[:, 1]
+    T = se2_matrices(np.column_stack([space.origin_x + s[:, 0], space.origin_y + s[:, 1], s[:, 2]]))
     T[:, 2, 3] = space.table_z
     return T
 
@@ -164,9 +158,12 @@ def reach_bound(robot, frame: str | None = None) -> ReachBound:
     m = robot.model
     frame = robot.tool_frame if frame is None else frame
     f = m.frames[m.getFrameId(frame)]
-    puma = _puma_shell(robot, f)
+    puma = puma_dh_constants(robot, frame)
     if puma is not None:
-        return puma
+        # exact for a Puma-type arm: the wrist centre is (c1 x1 + s1 d_off, s1 x1 - c1 d_off,
+        # d1 + y1) with |(x1, y1)| <= a2 + hypot(a3, d4)
+        radius = float(np.hypot(puma["a2"] + np.hypot(puma["a3"], puma["d4"]), puma["d_off"]))
+        return ReachBound(np.array([0.0, 0.0, puma["d1"]]), radius, float(puma["reach"]))
     joints = list(m.supports[f.parentJoint])[1:]
     centre = np.array(m.jointPlacements[joints[0]].translation, dtype=float)
     radius = float(sum(np.linalg.norm(m.jointPlacements[j].translation) for j in joints[1:]))
@@ -175,30 +172,6 @@ def reach_bound(robot, frame: str | None = None) -> ReachBound:
     if np.allclose(p_f[:2], 0.0) and np.allclose(z_f, [0.0, 0.0, 1.0]):
         return ReachBound(centre, radius, float(p_f[2]))
     return ReachBound(centre, radius + float(np.linalg.norm(p_f)), 0.0)
-
-
-# Standard-DH alpha pattern of a Puma-type arm (spherical wrist, shoulder offset).
-_PUMA_ALPHA = np.array([np.pi / 2, 0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, 0.0])
-
-
-def _puma_shell(robot, f) -> ReachBound | None:
-    """Tighter exact sphere for a Puma-type DH arm: the wrist centre is
-    ``(c1 x1 + s1 d_off, s1 x1 - c1 d_off, d1 + y1)`` with ``|(x1, y1)| <= a2 + hypot(a3, d4)``,
-    so ``|w - (0, 0, d1)|^2 <= (a2 + hypot(a3, d4))^2 + d_off^2``."""
-    dh = getattr(robot, "dh", None)
-    if dh is None or np.shape(dh) != (6, 3) or not np.allclose(dh[:, 2], _PUMA_ALPHA):
-        return None
-    a, d = dh[:, 0], dh[:, 1]
-    if not (a[0] == 0 and a[3] == 0 and a[4] == 0 and a[5] == 0 and d[4] == 0):
-        return None
-    m = robot.model
-    if f.parentJoint != m.njoints - 1 or m.njoints != 7:
-        return None
-    p_f = np.asarray(f.placement.translation, dtype=float)  # in joint 6's frame, DH row 6 included
-    if not (np.allclose(p_f[:2], 0.0) and np.allclose(np.asarray(f.placement.rotation)[:, 2], [0, 0, 1])):
-        return None
-    radius = float(np.hypot(a[1] + np.hypot(a[2], d[3]), d[1] + d[2]))
-    return ReachBound(np.array([0.0, 0.0, d[0]]), radius, float(p_f[2]))
 
 
 # ---------------------------------------------------------------- the reach test
@@ -391,8 +364,9 @@ def _reach_sweep_by_name(robot_name, positions, axes, patch_targets, setups, spa
 
 
 def setup_keys(setups) -> list[tuple[int, int, int]]:
-    """Hashable identity of each setup (coordinates quantised to 1e-7 m / rad)."""
-    q = np.round(np.asarray(setups, dtype=float) / _KEY_QUANTUM).astype(np.int64)
+    """Hashable identity of each setup (coordinates quantised to
+    :data:`mavac.tolerances.SETUP_KEY_QUANTUM`, m / rad)."""
+    q = np.round(np.asarray(setups, dtype=float) / SETUP_KEY_QUANTUM).astype(np.int64)
     return [tuple(row) for row in q.reshape(-1, 3).tolist()]
 
 

@@ -12,7 +12,7 @@ iff
 With ``x_c > 0`` conditions 2-3 are evaluated as ``|y_c| <= x_c tan(theta_a)`` (identical
 sets, no trigonometry per point). A guard camera sits exactly ``L_d`` from its target along
 the normal, so a flat surface facing it lies *on* the far plane ``x_c = L_d``; condition 1 is
-therefore tested with a relative tolerance of ``1e-9`` (``x_c <= L_d (1 + 1e-9)``) so that
+therefore tested with the relative tolerance :data:`mavac.tolerances.FAR_PLANE_RTOL` (1e-9) so that
 rounding does not split such a surface at random.
 """
 
@@ -20,46 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry.transforms import check_transform, check_transforms, points_in_frame
 from ..params import CameraParams
+from ..tolerances import FAR_PLANE_RTOL, PARALLEL_TOL
 from ..validate import check_points, check_positive
 
 # Cameras x points evaluated per block in fov_masks: bounds the (block, n, 3) temporaries.
 _FOV_BLOCK_ELEMENTS = 2_000_000
-# Relative tolerance on the far plane x_c = L_d (see module docstring).
-_FAR_PLANE_RTOL = 1e-9
-
-
-def check_transforms(name: str, transforms) -> np.ndarray:
-    """Validate homogeneous rigid transforms.
-
-    Parameters
-    ----------
-    name : str
-        Parameter name used in the error message.
-    transforms : (4, 4) or (m, 4, 4) float
-
-    Returns
-    -------
-    (m, 4, 4) float
-        The transforms (a single one is promoted); ``ValueError`` unless finite, with an
-        orthonormal rotation of determinant +1 (tolerance 1e-6) and last row ``0 0 0 1``.
-    """
-    T = np.asarray(transforms, dtype=float)
-    if T.ndim == 2:
-        T = T[None]
-    if T.ndim != 3 or T.shape[1:] != (4, 4):
-        raise ValueError(f"{name} must have shape (4, 4) or (m, 4, 4), got {T.shape}")
-    if not np.all(np.isfinite(T)):
-        raise ValueError(f"{name} contains NaN or infinite values")
-    R = T[:, :3, :3]
-    should_be_identity = np.einsum("mji,mjk->mik", R, R)
-    if not np.allclose(should_be_identity, np.eye(3), atol=1e-6) or not np.allclose(
-        T[:, 3], [0.0, 0.0, 0.0, 1.0]
-    ):
-        raise ValueError(f"{name} must be rigid transforms (orthonormal rotation, last row 0 0 0 1)")
-    if np.any(np.linalg.det(R) < 0):
-        raise ValueError(f"{name} rotation has determinant -1 (a reflection), expected +1")
-    return T
 
 
 def points_in_camera(points_world, world_T_cameras) -> np.ndarray:
@@ -78,8 +45,7 @@ def points_in_camera(points_world, world_T_cameras) -> np.ndarray:
     """
     P = check_points("points_world", points_world)
     T = check_transforms("world_T_cameras", world_T_cameras)
-    # camera_T_world = [R^T, -R^T t]: p_c = R^T (s - t), i.e. row vectors (s - t)^T R.
-    return (P[None, :, :] - T[:, None, :3, 3]) @ T[:, :3, :3]
+    return points_in_frame(T, P)
 
 
 def fov_masks(points_world, world_T_cameras, camera: CameraParams) -> np.ndarray:
@@ -103,7 +69,7 @@ def fov_masks(points_world, world_T_cameras, camera: CameraParams) -> np.ndarray
     P = check_points("points_world", points_world)
     T = check_transforms("world_T_cameras", world_T_cameras)
     tan_a, tan_b = np.tan(camera.theta_a), np.tan(camera.theta_b)
-    far = camera.L_d * (1.0 + _FAR_PLANE_RTOL)
+    far = camera.L_d * (1.0 + FAR_PLANE_RTOL)
     out = np.zeros((T.shape[0], P.shape[0]), dtype=bool)
     block = max(1, _FOV_BLOCK_ELEMENTS // max(1, P.shape[0]))
     for start in range(0, T.shape[0], block):
@@ -130,10 +96,7 @@ def fov_mask(points_world, world_T_camera, camera: CameraParams) -> np.ndarray:
     (n,) bool
         ``True`` for points inside the pyramid (see :func:`fov_masks`).
     """
-    T = np.asarray(world_T_camera, dtype=float)
-    if T.shape != (4, 4):
-        raise ValueError(f"world_T_camera must have shape (4, 4), got {T.shape}")
-    return fov_masks(points_world, T[None], camera)[0]
+    return fov_masks(points_world, check_transform("world_T_camera", world_T_camera)[None], camera)[0]
 
 
 def camera_pose_looking_at(target, normal, distance) -> np.ndarray:
@@ -174,7 +137,7 @@ def camera_pose_looking_at(target, normal, distance) -> np.ndarray:
     n = n[0] / norm
     x_axis = -n
     up = np.array([0.0, 0.0, 1.0])
-    if abs(x_axis @ up) > 1.0 - 1e-9:
+    if abs(x_axis @ up) > 1.0 - PARALLEL_TOL:
         up = np.array([1.0, 0.0, 0.0])
     z_axis = up - (up @ x_axis) * x_axis
     z_axis /= np.linalg.norm(z_axis)
@@ -194,10 +157,7 @@ def fov_pyramid_corners(world_T_camera, camera: CameraParams) -> np.ndarray:
         Row 0 is the camera origin; rows 1-4 the corners at ``x_c = L_d`` in the order
         (+y,+z), (-y,+z), (-y,-z), (+y,-z).
     """
-    T = np.asarray(world_T_camera, dtype=float)
-    if T.shape != (4, 4):
-        raise ValueError(f"world_T_camera must have shape (4, 4), got {T.shape}")
-    T = check_transforms("world_T_camera", T)[0]
+    T = check_transform("world_T_camera", world_T_camera)
     L = camera.L_d
     wy, wz = L * np.tan(camera.theta_a), L * np.tan(camera.theta_b)
     local = np.array(

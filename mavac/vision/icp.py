@@ -20,6 +20,7 @@ import trimesh
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
+from ..geometry.transforms import check_transform
 from ..params import ICPParams
 from ..validate import check_int, check_nonnegative, check_points, check_positive
 from .visibility import raycast_visible
@@ -27,13 +28,6 @@ from .visibility import raycast_visible
 
 # Model points over which the symmetry-aware error (ADD-S) is averaged.
 _ADDS_POINTS = 2000
-
-
-def _check_transform(name: str, T) -> np.ndarray:
-    T = np.asarray(T, dtype=float)
-    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
-        raise ValueError(f"{name} must be a finite (4, 4) transform, got shape {T.shape}")
-    return T
 
 
 def rotation_error(R_a, R_b) -> float:
@@ -84,7 +78,7 @@ def register_part(cad_mesh: trimesh.Trimesh, cloud_points, init_T, params: ICPPa
     cloud = check_points("cloud_points", cloud_points)
     if len(cloud) < 3:
         raise ValueError(f"cloud_points needs at least 3 points, got {len(cloud)}")
-    T0 = _check_transform("init_T", init_T)
+    T0 = check_transform("init_T", init_T)
     model, normals = model_samples(cad_mesh, params.model_points, seed)
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(cloud))
     target = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(model))
@@ -125,7 +119,7 @@ def partial_noisy_cloud(mesh: trimesh.Trimesh, world_T_part, view_dir, noise_std
         Samples of the surface facing the sensor and not occluded (exact ray casting,
         :func:`mavac.vision.visibility.raycast_visible`), moved along their ray by the noise.
     """
-    T = _check_transform("world_T_part", world_T_part)
+    T = check_transform("world_T_part", world_T_part)
     d = check_points("view_dir", view_dir)[0]
     if np.linalg.norm(d) == 0:
         raise ValueError("view_dir must be non-zero")

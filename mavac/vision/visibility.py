@@ -32,14 +32,14 @@ import time
 import numpy as np
 import trimesh
 
+from ..geometry.transforms import check_transforms
 from ..params import CameraParams
+from ..tolerances import RAY_EPS_RELATIVE
 from ..validate import check_points, check_positive, check_range
-from .camera import check_transforms, fov_masks
+from .camera import fov_masks
 
 # Rays per Embree call: 2**20 rays x 6 float32 = 24 MB.
 _RAYS_PER_CALL = 1 << 20
-# Relative tolerance (of the mesh bounding-box diagonal) for "the ray reached the point".
-_EPS_RELATIVE = 1e-4
 _HPR_INPUTS = ("surface", "fov")
 
 
@@ -118,8 +118,7 @@ class VisibilityScene:
         Occluding geometry (metres).
     eps : float, optional
         A point counts as reached when nothing is hit before ``|p - v| - eps``. Default
-        ``1e-4`` x the mesh bounding-box diagonal: large against float32 ray precision,
-        small against any wall thickness.
+        :data:`mavac.tolerances.RAY_EPS_RELATIVE` (1e-4) x the mesh bounding-box diagonal.
 
     Notes
     -----
@@ -133,7 +132,7 @@ class VisibilityScene:
         self.vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
         self.faces = np.ascontiguousarray(mesh.faces, dtype=np.uint32)
         self.scale = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
-        self.eps = _EPS_RELATIVE * self.scale if eps is None else float(check_positive("eps", eps))
+        self.eps = RAY_EPS_RELATIVE * self.scale if eps is None else float(check_positive("eps", eps))
         self._scene = None
 
     def __getstate__(self):

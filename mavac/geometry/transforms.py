@@ -1,0 +1,126 @@
+"""Rigid transforms, in one place (pytransform3d's conventions).
+
+``a_T_b`` is a (4, 4) float64 homogeneous matrix, the pose of frame *b* in frame *a*: a point
+``p_b`` in *b* is ``p_a = R p_b + t`` in *a*, and ``a_T_c = a_T_b @ b_T_c``
+(:func:`compose`). Stacks ``(m, 4, 4)`` are accepted wherever one transform is. Points and
+vectors are row arrays ``(n, 3)``.
+
+A mobile base pose is SE(2) ``(x, y, theta)`` (m, m, rad) -> ``world_T_base``
+(:func:`se2_matrices`, :func:`se2_to_matrix`): a rotation about the world z axis
+(:func:`rz`) and a translation in the floor plane.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..tolerances import RIGID_ATOL
+from ..validate import check_points, check_range
+
+
+def check_transforms(name: str, transforms) -> np.ndarray:
+    """Validate homogeneous rigid transforms.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name used in the error message.
+    transforms : (4, 4) or (m, 4, 4) float
+
+    Returns
+    -------
+    (m, 4, 4) float
+        The transforms (a single one is promoted).
+
+    Raises
+    ------
+    ValueError
+        Unless finite, with a rotation orthonormal to :data:`mavac.tolerances.RIGID_ATOL`,
+        of determinant +1, and a last row ``0 0 0 1``.
+    """
+    T = np.asarray(transforms, dtype=float)
+    if T.ndim == 2:
+        T = T[None]
+    if T.ndim != 3 or T.shape[1:] != (4, 4):
+        raise ValueError(f"{name} must have shape (4, 4) or (m, 4, 4), got {np.shape(transforms)}")
+    if not np.all(np.isfinite(T)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    R = T[:, :3, :3]
+    deviation = np.abs(np.einsum("mji,mjk->mik", R, R) - np.eye(3))
+    last_row = np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0])
+    if np.max(deviation, initial=0.0) > RIGID_ATOL or np.max(last_row, initial=0.0) > RIGID_ATOL:
+        raise ValueError(f"{name} must be rigid transforms (orthonormal rotation, last row 0 0 0 1)")
+    if np.any(np.linalg.det(R) < 0):
+        raise ValueError(f"{name} rotation has determinant -1 (a reflection), expected +1")
+    return T
+
+
+def check_transform(name: str, transform) -> np.ndarray:
+    """:func:`check_transforms` for exactly one transform; returns it as (4, 4) float."""
+    if np.shape(transform) != (4, 4):
+        raise ValueError(f"{name} must have shape (4, 4), got {np.shape(transform)}")
+    return check_transforms(name, transform)[0]
+
+
+def rz(theta) -> np.ndarray:
+    """Rotations about z by ``theta`` (rad): ``(3, 3)`` for a scalar, ``(..., 3, 3)`` else."""
+    theta = np.asarray(theta, dtype=float)
+    c, s = np.cos(theta), np.sin(theta)
+    R = np.zeros(theta.shape + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1] = c, -s, s, c
+    R[..., 2, 2] = 1.0
+    return R
+
+
+def se2_matrices(poses) -> np.ndarray:
+    """``world_T_base`` (m, 4, 4) from planar poses ``(x, y, theta)`` (m, 3), m and rad."""
+    p = check_points("poses", poses)
+    T = np.tile(np.eye(4), (len(p), 1, 1))
+    T[:, :3, :3] = rz(p[:, 2])
+    T[:, :2, 3] = p[:, :2]
+    return T
+
+
+def se2_to_matrix(x: float, y: float, theta: float) -> np.ndarray:
+    """Planar base pose ``(x, y, theta)`` (m, m, rad) -> ``world_T_base`` (4, 4)."""
+    for name, v in (("x", x), ("y", y), ("theta", theta)):
+        check_range(name, v)
+    return se2_matrices(np.array([[x, y, theta]], dtype=float))[0]
+
+
+def compose(*transforms) -> np.ndarray:
+    """``a_T_b @ b_T_c @ ...`` (stacks broadcast): ``compose(world_T_base, base_T_camera)``."""
+    if not transforms:
+        raise ValueError("compose needs at least one transform")
+    out = np.asarray(transforms[0], dtype=float)
+    for T in transforms[1:]:
+        out = out @ np.asarray(T, dtype=float)
+    return out
+
+
+def transform_points(a_T_b, points_b) -> np.ndarray:
+    """Points of frame *b* expressed in frame *a*, ``R p + t``: (4, 4) and (n, 3) -> (n, 3)."""
+    T = np.asarray(a_T_b, dtype=float)
+    return np.asarray(points_b, dtype=float) @ T[:3, :3].T + T[:3, 3]
+
+
+def rotate_vectors(a_T_b, vectors_b) -> np.ndarray:
+    """Directions of frame *b* expressed in frame *a*, ``R v``: (n, 3) -> (n, 3)."""
+    return np.asarray(vectors_b, dtype=float) @ np.asarray(a_T_b, dtype=float)[:3, :3].T
+
+
+def points_in_frame(a_T_b, points_a) -> np.ndarray:
+    """Points of frame *a* expressed in frame *b*, ``R^T (p - t)``.
+
+    ``a_T_b`` (4, 4) gives (n, 3); a stack (m, 4, 4) gives (m, n, 3), one set per frame.
+    """
+    T = np.asarray(a_T_b, dtype=float)
+    P = np.asarray(points_a, dtype=float)
+    if T.ndim == 3:
+        return (P[None, :, :] - T[:, None, :3, 3]) @ T[:, :3, :3]
+    return (P - T[:3, 3]) @ T[:3, :3]
+
+
+def vectors_in_frame(a_T_b, vectors_a) -> np.ndarray:
+    """Directions of frame *a* expressed in frame *b*, ``R^T v``: (n, 3) -> (n, 3)."""
+    return np.asarray(vectors_a, dtype=float) @ np.asarray(a_T_b, dtype=float)[:3, :3]
