@@ -40,6 +40,10 @@ TARGET_DECIMALS = 9
 #: candidate tying the threshold is kept whatever the last bit of the product.
 GREEDY_TIE_RTOL = 1e-12
 
+#: A 2-opt move must shorten a tour by more than this (m or rad), so moves that only trade
+#: rounding errors are not taken and the improvement loop always ends.
+TOUR_GAIN_TOL = 1e-12
+
 #: Slack (in units of the quantity) when a count is taken from a ratio that should be an
 #: integer, e.g. ``(hi - lo) / step`` of a sampling grid or ``length / spacing`` of a tool
 #: path: 21 grid values over [0, 1 m] at 50 mm must not become 20 by rounding.

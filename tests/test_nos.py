@@ -5,6 +5,7 @@ import pytest
 import trimesh
 
 from mavac.inspection import nos
+from mavac.params import NoSParams
 
 
 def _box_with_hole(hole_center_x=0.2):
@@ -31,8 +32,8 @@ def test_gateway_found_through_hole_in_closed_box():
     grid = np.stack(np.meshgrid(np.linspace(0.1, 0.3, 5), np.linspace(-0.1, 0.1, 5)), -1).reshape(-1, 2)
     pts = np.column_stack([grid, np.full(len(grid), 0.1)])
     nrm = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
-    clusters = nos.nos_clusters(mesh, pts, nrm, np.zeros(len(pts), bool), eps=0.08, min_samples=3,
-                                n_rays=800, ray_length=2.0)
+    clusters = nos.nos_clusters(mesh, pts, nrm, np.zeros(len(pts), bool),
+                                NoSParams(eps_factor=1.0, min_samples=3, n_rays=800, ray_length=2.0), spacing=0.08)
     assert len(clusters) == 1
     c = clusters[0]
     assert len(c.gateways) == 1  # the hole is the only way out
@@ -52,7 +53,8 @@ def test_closed_box_has_no_gateway():
     inner.apply_translation([0, 0, 0.5])
     mesh = trimesh.boolean.difference([outer, inner], engine="manifold")
     pts = np.array([[0.0, 0.0, 0.1], [0.02, 0.0, 0.1], [0.0, 0.02, 0.1]])
-    clusters = nos.nos_clusters(mesh, pts, np.tile([0, 0, 1.0], (3, 1)), np.zeros(3, bool), 0.05, 2, 300, 2.0)
+    clusters = nos.nos_clusters(mesh, pts, np.tile([0, 0, 1.0], (3, 1)), np.zeros(3, bool),
+                                NoSParams(eps_factor=1.0, min_samples=2, n_rays=300, ray_length=2.0), spacing=0.05)
     assert len(clusters) == 1 and clusters[0].best_gateway is None
 
 
@@ -100,4 +102,7 @@ def test_bad_inputs():
     with pytest.raises(ValueError, match="observed"):
         nos.cluster_unobserved(np.zeros((3, 3)), np.zeros(2, bool), 0.1, 2)
     with pytest.raises(ValueError, match="ray_length"):
-        nos.nos_clusters(_box_with_hole(), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros(3, bool), 0.1, 2, 50, 0.0)
+        NoSParams(ray_length=0.0)
+    with pytest.raises(ValueError, match="spacing"):
+        nos.nos_clusters(_box_with_hole(), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros(3, bool), NoSParams(),
+                         spacing=0.0)

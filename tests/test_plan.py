@@ -189,3 +189,32 @@ def test_camera_validation_reaches_inspection_params():
         InspectionParams(camera=CameraParams(L_d=0.0))
     with pytest.raises(ValueError, match="theta_a"):
         CameraParams(theta_a=2.0)
+
+
+def test_guards_of_later_spots_count_only_elements_not_seen_at_earlier_spots(ctx, plan):
+    from mavac.inspection.plan import guards_at_spots, spot_tour
+
+    spots, rows = spot_tour(plan.spot_selection)
+    assert np.array_equal(spots, plan.spots)
+    selections = guards_at_spots(ctx, rows, ctx.params.guard)
+    seen = np.zeros(len(ctx.points), dtype=bool)
+    overlap = False
+    for s in selections:
+        for i in range(len(s.guards)):
+            # the greedy gain of a guard is what it adds to every guard chosen before it,
+            # at this spot and at the spots before
+            assert s.greedy.gains[i] == np.count_nonzero(s.visible[i] & ~seen)
+            overlap |= bool(np.any(s.visible[i] & seen))
+            seen |= s.visible[i]
+    # the fixture must let a later guard see something seen before, or this proves nothing
+    assert len(selections) >= 2 and overlap
+    assert np.array_equal(seen, selections[-1].greedy.covered)
+
+
+def test_pose_set_attributes_of_the_plan(plan):
+    ps = plan.pose_set
+    assert len(ps) == len(plan.poses)
+    for name, column in (("poses", "poses"), ("pose_spot", "spot"), ("pose_kind", "kind"),
+                         ("pose_target", "target"), ("world_T_camera", "world_T_camera"),
+                         ("maneuverability", "maneuverability"), ("visible", "visible")):
+        assert getattr(plan, name) is getattr(ps, column)

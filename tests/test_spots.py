@@ -79,7 +79,8 @@ def test_spot_visibility_and_accessibility(box):
     pts = np.array([[0.0, -0.5, 0.4], [0.0, 0.5, 0.4], [0.0, 0.0, 0.8], [0.9, -0.5, 0.4]])
     nrm = np.array([[0, -1.0, 0], [0, 1.0, 0], [0, 0, 1.0], [0, -1.0, 0]])
     spot = np.array([[0.0, -1.1, 0.0]])
-    vis = SP.spot_visibility(pts, nrm, spot, (0.8, 1.6), "raycast", VisibilityScene(box))
+    vis = SP.spot_visibility(pts, nrm, spot, SpotParams(view_heights=(0.8, 1.6), visibility="raycast"),
+                             vis_scene=VisibilityScene(box))
     assert vis.tolist() == [[True, False, True, True]]
     rmap = reachability_map(ur10_mobile(), ReachabilityMapParams(voxel_size=0.1, n_directions=26,
                                                                  n_samples=20_000, n_rotations=32))
@@ -114,10 +115,11 @@ def test_select_spots_is_the_greedy_choice():
 def test_bad_input():
     with pytest.raises(ValueError, match="footprint"):
         SP.candidate_spots(RECT[:2], SpotParams(), np.random.default_rng(0))
-    with pytest.raises(ValueError, match="method"):
-        SP.spot_visibility(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((1, 3)), (1.0,), "exact")
+    with pytest.raises(ValueError, match="visibility"):
+        SpotParams(view_heights=(1.0,), visibility="exact")
     with pytest.raises(ValueError, match="vis_scene"):
-        SP.spot_visibility(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((1, 3)), (1.0,), "raycast")
+        SP.spot_visibility(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((1, 3)),
+                           SpotParams(view_heights=(1.0,), visibility="raycast"))
     with pytest.raises(ValueError, match="jitter_theta"):
         SpotParams(jitter_theta=4.0)
     with pytest.raises(ValueError, match="heading_offsets"):

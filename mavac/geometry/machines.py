@@ -23,13 +23,12 @@ import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull
 
-from mavac.geometry.surface import sample_surface
-from mavac.validate import check_points, check_positive, check_range
+from ..tolerances import FLOOR_NORMAL_Z, FLOOR_TOLERANCE
+from ..validate import check_points, check_positive, check_range
+from .surface import sample_surface
 
 #: names ``load_machine`` accepts
 MACHINE_NAMES = ("test_bench", "sanding_machine", "milling_machine")
-#: faces this close to the floor and facing down are the machine's base, not exposed
-FLOOR_TOLERANCE = 1e-6
 #: dust rests on faces whose normal is within 60 degrees of vertical (cos 60 = 0.5)
 DUST_MIN_NORMAL_Z = 0.5
 
@@ -230,10 +229,17 @@ def load_machine(name: str) -> Machine:
     return _build(name)
 
 
+def on_floor(z, normal_z) -> np.ndarray:
+    """Whether surface pieces at height ``z`` (m) with normal z-component ``normal_z`` are the
+    machine's base standing on the floor: on it (:data:`mavac.tolerances.FLOOR_TOLERANCE`) and
+    facing down (:data:`mavac.tolerances.FLOOR_NORMAL_Z`), so not exposed. Arrays broadcast."""
+    return (np.asarray(z) <= FLOOR_TOLERANCE) & (np.asarray(normal_z) < FLOOR_NORMAL_Z)
+
+
 def _floor_faces(mesh: trimesh.Trimesh) -> np.ndarray:
     """(n,) bool: downward faces lying on the floor (the machine's base)."""
-    on_floor = np.asarray(mesh.vertices)[np.asarray(mesh.faces)][:, :, 2].max(axis=1) <= FLOOR_TOLERANCE
-    return on_floor & (np.asarray(mesh.face_normals)[:, 2] < -0.99)
+    top = np.asarray(mesh.vertices)[np.asarray(mesh.faces)][:, :, 2].max(axis=1)
+    return on_floor(top, np.asarray(mesh.face_normals)[:, 2])
 
 
 def exposed_area(machine: Machine) -> float:

@@ -18,8 +18,10 @@ import numpy as np
 from ..geometry.transforms import compose, points_in_frame, vectors_in_frame
 from ..params import CameraParams, GuardParams
 from ..planning.greedy import GreedyResult, greedy_select
+from ..robots.kinematics import fk, ik_axis, maneuverability
 from ..validate import check_points, check_positive
-from .reachability import OPTICAL_AXIS
+from ..vision.camera import OPTICAL_AXIS, fov_masks
+from ..vision.visibility import visible_from
 
 # Random IK restarts per target after the first attempt from the home configuration (ours:
 # the reachability map already removed most unreachable targets, so few restarts are needed).
@@ -142,8 +144,6 @@ def camera_configurations(robot, checker, world_T_base, positions, axes, rng, q0
     n_ik : int
         IK successes before the collision check.
     """
-    from ..robots.kinematics import ik_axis
-
     T = np.asarray(world_T_base, dtype=float)
     if len(positions) == 0:
         return np.zeros(0, dtype=bool), np.zeros((0, robot.nq)), 0
@@ -173,9 +173,6 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
     camera : CameraParams
     rng : numpy.random.Generator
     """
-    from ..robots.kinematics import fk, maneuverability
-    from ..vision.camera import fov_masks
-
     targets = np.asarray(targets, dtype=np.int64)
     positions = points[targets] + camera.L_d * normals[targets]
     ok, q, n_ik = camera_configurations(robot, checker, world_T_base, positions, -normals[targets], rng)
@@ -193,8 +190,6 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
 def guard_visibility(world_T_cameras, points, normals, camera: CameraParams, params: GuardParams,
                      vis_scene=None) -> np.ndarray:
     """What guards see: FOV pyramid AND (HPR or ray casting), (g, n) bool."""
-    from ..vision.visibility import visible_from
-
     return visible_from(points, normals, world_T_cameras, camera, method=params.visibility,
                         mesh=vis_scene, hpr_input=params.hpr_input)
 

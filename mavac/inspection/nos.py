@@ -4,7 +4,8 @@ MAVAC, "Non-observed surface (NoS)": elements no guard observes are clustered wi
 are cast outward from each cluster centre; rays that leave without hitting the machine are grouped
 into gateways; the gateway with the most rays is the best; the spot used is the one closest to the
 gateway's mean exit direction projected on the floor. The NoS guard is then kept only if a
-collision-free path to it exists (see :func:`mavac.inspection.plan.plan_from_context`).
+collision-free path to it exists (:func:`nos_guards`, the whole stage: clusters, gateways, IK on
+the gateway's rays, RRT-Connect from the spot's home configuration, the attempt record).
 
 Here the floor (z = 0) is part of the scene, so a ray that goes down and hits the floor is blocked,
 and gateways are connected components of escaping rays on the fan's neighbour graph.
@@ -17,7 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.transforms import compose, se2_matrices
+from ..params import CameraParams, InspectionParams, NoSParams
+from ..planning.rrt import plan_rrt_connect
+from ..robots.kinematics import fk
 from ..validate import check_int, check_points, check_positive
+from .guards import camera_configurations, guard_visibility
 
 
 @dataclass(frozen=True)
@@ -204,9 +210,8 @@ def group_gateways(directions, escaping, neighbour_factor: float = 1.6) -> list[
     return groups
 
 
-def nos_clusters(mesh, points, normals, observed, eps: float, min_samples: int, n_rays: int,
-                 ray_length: float, origin_offset: float = 0.01, floor_z: float | None = 0.0,
-                 scene=None) -> list[NoSCluster]:
+def nos_clusters(mesh, points, normals, observed, params: NoSParams, *, spacing: float,
+                 floor_z: float | None = 0.0, scene=None) -> list[NoSCluster]:
     """Cluster the non-observed elements, cast a ray fan from each centre, find gateways.
 
     Parameters
@@ -217,13 +222,14 @@ def nos_clusters(mesh, points, normals, observed, eps: float, min_samples: int, 
         Surface elements S and their outward normals.
     observed : (n,) bool
         Elements covered by the guards.
-    eps, min_samples : DBSCAN parameters (m, count).
-    n_rays : int
-        Rays in the fan (Fibonacci sphere).
-    ray_length : float, m
-        A ray escapes when it hits neither the machine nor the floor within this length.
-    origin_offset : float, m
-        The ray origin is lifted this far off the surface along the normal.
+    params : NoSParams
+        DBSCAN ``eps_factor`` and ``min_samples``; ``n_rays`` of the fan (Fibonacci sphere);
+        ``ray_length`` (m) a ray must travel without hitting the machine or the floor to
+        escape; ``origin_offset`` (m) the ray origin is lifted off the surface.
+    spacing : float, m
+        Spacing of S; the DBSCAN radius is ``params.eps_factor * spacing``.
+    floor_z : float or None
+        Height of the floor that blocks rays (None: no floor).
     scene : RaycastingScene, optional
         Reuse a scene built by :func:`raycasting_scene`.
 
@@ -233,21 +239,21 @@ def nos_clusters(mesh, points, normals, observed, eps: float, min_samples: int, 
     """
     points = check_points("points", points)
     normals = check_points("normals", normals)
-    check_positive("ray_length", ray_length)
-    labels = cluster_unobserved(points, observed, eps, min_samples)
+    check_positive("spacing", spacing)
+    labels = cluster_unobserved(points, observed, params.eps_factor * spacing, params.min_samples)
     n_labels = int(labels.max()) + 1 if len(labels) else 0
     if n_labels == 0:
         return []
     if scene is None:
         scene = raycasting_scene(mesh, floor_z)
-    fan = sphere_directions(n_rays)
+    fan = sphere_directions(params.n_rays)
     members, origins = [], []
     for lab in range(n_labels):
         m = np.flatnonzero(labels == lab)
         centre = points[m].mean(axis=0)
         j = m[np.argmin(np.linalg.norm(points[m] - centre, axis=1))]
         members.append(m)
-        origins.append(points[j] + origin_offset * normals[j])
+        origins.append(points[j] + params.origin_offset * normals[j])
     origins = np.asarray(origins)
     # one batched cast for every cluster's fan
     o = np.repeat(origins, len(fan), axis=0)
@@ -255,7 +261,7 @@ def nos_clusters(mesh, points, normals, observed, eps: float, min_samples: int, 
     t = first_hit_distance(scene, o, d).reshape(n_labels, len(fan))
     out = []
     for lab in range(n_labels):
-        esc = t[lab] > ray_length
+        esc = t[lab] > params.ray_length
         gws = []
         for g in group_gateways(fan, esc):
             dirs = fan[g]
@@ -293,3 +299,108 @@ def spot_along_direction(spots_xy, origin, direction) -> int:
     d = d / norm
     t = np.clip(rel @ d, 0.0, None)
     return int(np.argmin(np.linalg.norm(rel - t[:, None] * d, axis=1)))
+
+
+# ---------------------------------------------------------------- the NoS stage of the plan
+
+
+@dataclass(frozen=True)
+class NoSGuard:
+    """A NoS guard: a camera configuration on a gateway ray that RRT-Connect reaches.
+
+    Attributes
+    ----------
+    spot : int
+        Index into the plan's spots (tour order).
+    q : (nq,) float, rad
+    world_T_camera : (4, 4) float
+    visible : (n,) bool
+        Elements of S it sees (FOV + HPR or ray casting).
+    """
+
+    spot: int
+    q: np.ndarray
+    world_T_camera: np.ndarray
+    visible: np.ndarray
+
+
+def gateway_rays(gateway: Gateway, max_tries: int) -> np.ndarray:
+    """The gateway's rays closest to its exit direction, best first, at most ``max_tries``, (r, 3)."""
+    d = gateway.ray_directions
+    return d[np.argsort(-(d @ gateway.direction), kind="stable")[:max_tries]]
+
+
+def attempt_nos_guard(cluster: NoSCluster, spot: int, world_T_base, robot, checker, params: NoSParams,
+                      camera: CameraParams, rng: np.random.Generator) -> tuple[dict, np.ndarray | None]:
+    """One NoS guard attempt from a spot: IK on the best gateway's rays, then RRT-Connect.
+
+    The camera sits ``L_d`` out along the first of :func:`gateway_rays` that has a collision-free
+    IK solution, looking back along it; the guard is kept when RRT-Connect finds a path to that
+    configuration from the robot's home configuration (MAVAC, "Non-observed surface").
+
+    Returns
+    -------
+    record : dict
+        ``cluster, n_elements, spot, n_rays, ik, solved, reason, seconds``.
+    q : (nq,) float or None
+        The NoS guard configuration when RRT-Connect solved, else None.
+    """
+    gw = cluster.best_gateway
+    rays = gateway_rays(gw, params.max_ray_tries)
+    ok, q, _ = camera_configurations(robot, checker, world_T_base, cluster.origin + camera.L_d * rays, -rays, rng)
+    record = {"cluster": int(cluster.label), "n_elements": int(len(cluster.members)), "spot": int(spot),
+              "n_rays": gw.n_rays, "ik": bool(ok.any()), "solved": False, "reason": "no collision-free IK",
+              "seconds": 0.0}
+    if not ok.any():
+        return record, None
+    q_goal = q[int(np.argmax(ok))]
+    checker.set_base(world_T_base)
+    res = plan_rrt_connect(lambda qq: not bool(checker.in_collision(qq)), robot.q_home, q_goal,
+                           robot.q_lower, robot.q_upper, time_limit=params.rrt_time_limit,
+                           seed=int(rng.integers(2**31 - 1)), resolution=params.rrt_resolution,
+                           max_iterations=params.rrt_max_iterations)
+    record.update(solved=bool(res.solved), reason=res.reason, seconds=float(res.seconds))
+    return record, (q_goal if res.solved else None)
+
+
+def nos_guards(ctx, spots, observed, params: InspectionParams) -> tuple[list, list, list]:
+    """The NoS stage: clusters of what the guards left unobserved, gateways, NoS guards.
+
+    Parameters
+    ----------
+    ctx : mavac.inspection.plan.OfflineContext
+        Machine mesh, robot, collision checker, S and its scenes.
+    spots : (k, 3) float
+        Spots in tour order; a cluster is tried from the spot along its exit direction
+        (:func:`spot_along_direction`), IK restarts and RRT seeded by ``(seed, 2, label)``.
+    observed : (n,) bool
+        Elements the regular guards cover.
+    params : InspectionParams
+        ``nos``, ``camera``, ``guard`` (visibility of a NoS guard), ``surface_spacing``, ``seed``.
+
+    Returns
+    -------
+    clusters : list of NoSCluster
+    guards : list of NoSGuard
+        In cluster order.
+    attempts : list of dict
+        One :func:`attempt_nos_guard` record per cluster with a gateway.
+    """
+    if not params.nos.enabled:
+        return [], [], []
+    clusters = nos_clusters(ctx.machine.mesh, ctx.points, ctx.normals, observed, params.nos,
+                            spacing=params.surface_spacing, scene=ctx.scene)
+    world_T_bases = se2_matrices(spots)
+    robot, guards, attempts = ctx.robot, [], []
+    for c in clusters:
+        if c.best_gateway is None:
+            continue
+        k = spot_along_direction(spots[:, :2], c.origin, c.best_gateway.direction)
+        rng = np.random.default_rng([params.seed, 2, c.label])
+        record, q = attempt_nos_guard(c, k, world_T_bases[k], robot, ctx.checker, params.nos, params.camera, rng)
+        if q is not None:
+            T = compose(world_T_bases[k], fk(robot, q, robot.camera_frame))
+            vis = guard_visibility(T[None], ctx.points, ctx.normals, params.camera, params.guard, ctx.vis_scene)[0]
+            guards.append(NoSGuard(k, q, T, vis))
+        attempts.append(record)
+    return clusters, guards, attempts

@@ -9,22 +9,42 @@
    selection with ``P_g`` and eq. 3; elements seen at earlier spots no longer count as new;
 4. coverage C and overlap O (eq. 1-2);
 5. non-observed surfaces: DBSCAN clusters, ray fans, gateways, NoS guards kept only if OMPL
-   RRT-Connect finds a path from the spot's home configuration;
+   RRT-Connect finds a path from the spot's home configuration (:func:`mavac.inspection.nos.nos_guards`);
 6. the pose set T: spots in a short tour (nearest neighbour + 2-opt on the floor), the guards
-   of each spot in a short joint-space order from the home configuration.
+   of each spot in a short joint-space order from the home configuration (:class:`PoseSet`).
+
+Stages 1-2 up to the accessible sets do not depend on the selection thresholds and are kept in
+an :class:`OfflineContext` (:func:`prepare_offline`), so sweeps over ``P_s`` and ``P_g`` reuse them
+(:func:`plan_from_context`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+import trimesh
+from tqdm.auto import tqdm
 
+from ..geometry.machines import Machine, machine_from_mesh, on_floor
+from ..geometry.surface import sample_surface
+from ..geometry.transforms import se2_matrices
+from ..io import write_json
 from ..params import InspectionParams
+from ..robots.collision import CollisionChecker
+from ..robots.kinematics import maneuverability
+from ..robots.models import load_robot, ur10_mobile
+from ..tolerances import TOUR_GAIN_TOL
+from ..vision.visibility import VisibilityScene
+from . import guards as G
+from . import spots as SP
 from .coverage import cover_counts, coverage_overlap
+from .nos import nos_guards, raycasting_scene
+from .reachability import reachability_map
 from .spots import SpotSelection
 
 POSE_KINDS = ("guard", "nos")
@@ -69,10 +89,52 @@ def short_open_path(dist, start: int = 0) -> np.ndarray:
             for j in range(i + 1, k):
                 before = d[p[i - 1], p[i]] + (d[p[j], p[j + 1]] if j + 1 < k else 0.0)
                 after = d[p[i - 1], p[j]] + (d[p[i], p[j + 1]] if j + 1 < k else 0.0)
-                if after < before - 1e-12:
+                if after < before - TOUR_GAIN_TOL:
                     p[i:j + 1] = p[i:j + 1][::-1].copy()
                     improved = True
     return p
+
+
+@dataclass(frozen=True)
+class PoseSet:
+    """The ordered pose set T, one row per pose (the paper's ``Gm = [m_b^T, q^T]^T``).
+
+    Attributes
+    ----------
+    poses : (h, 3 + nq) float
+        ``[x, y, theta, q_1 .. q_nq]`` per row, in execution order.
+    spot : (h,) int
+        Index into the plan's spots of each pose.
+    kind : (h,) str
+        ``"guard"`` or ``"nos"`` (NoS guard).
+    target : (h,) int
+        Element of S the guard was placed on (-1 for NoS guards).
+    world_T_camera : (h, 4, 4) float
+    maneuverability : (h,) float
+        I_m of each configuration.
+    visible : (h, n) bool
+        Elements each pose observes.
+    """
+
+    poses: np.ndarray
+    spot: np.ndarray
+    kind: np.ndarray
+    target: np.ndarray
+    world_T_camera: np.ndarray
+    maneuverability: np.ndarray
+    visible: np.ndarray
+
+    def __len__(self) -> int:
+        return int(len(self.poses))
+
+    @classmethod
+    def from_rows(cls, rows, n_elements: int, nq: int) -> PoseSet:
+        """From ``(pose, spot, kind, target, world_T_camera, maneuverability, visible)`` tuples."""
+        cols = list(zip(*rows)) if rows else [[]] * 7
+        return cls(np.array(cols[0], dtype=float).reshape(-1, 3 + nq), np.array(cols[1], dtype=np.int64),
+                   np.array(cols[2], dtype="<U5"), np.array(cols[3], dtype=np.int64),
+                   np.array(cols[4], dtype=float).reshape(-1, 4, 4), np.array(cols[5], dtype=float),
+                   np.array(cols[6], dtype=bool).reshape(-1, n_elements))
 
 
 @dataclass
@@ -87,20 +149,10 @@ class InspectionPlan:
         Surface elements S (world frame, m) and outward normals.
     spots : (k, 3) float
         Selected SE(2) base poses ``(x, y, theta)`` in tour order.
-    poses : (h, 3 + nq) float
-        The pose set T, in execution order: ``[x, y, theta, q_1 .. q_nq]`` per row
-        (the paper's ``Gm = [m_b^T, q^T]^T``).
-    pose_spot : (h,) int
-        Index into ``spots`` of each pose.
-    pose_kind : (h,) str
-        ``"guard"`` or ``"nos"`` (NoS guard).
-    pose_target : (h,) int
-        Element of S the guard was placed on (-1 for NoS guards).
-    world_T_camera : (h, 4, 4) float
-    maneuverability : (h,) float
-        I_m of each configuration.
-    visible : (h, n) bool
-        Elements each pose observes.
+    pose_set : PoseSet
+        The pose set T in execution order; its columns are also attributes of the plan:
+        ``poses`` (h, 3 + nq), ``pose_spot`` (h,), ``pose_kind`` (h,), ``pose_target`` (h,),
+        ``world_T_camera`` (h, 4, 4), ``maneuverability`` (h,), ``visible`` (h, n).
     spot_selection : SpotSelection or None
         Candidates, accessible sets and the greedy choice (None if no candidate exists).
     nos_clusters : list of mavac.inspection.nos.NoSCluster
@@ -123,13 +175,7 @@ class InspectionPlan:
     points: np.ndarray
     normals: np.ndarray
     spots: np.ndarray
-    poses: np.ndarray
-    pose_spot: np.ndarray
-    pose_kind: np.ndarray
-    pose_target: np.ndarray
-    world_T_camera: np.ndarray
-    maneuverability: np.ndarray
-    visible: np.ndarray
+    pose_set: PoseSet
     spot_selection: SpotSelection | None
     nos_clusters: list = field(default_factory=list)
     nos_attempts: list = field(default_factory=list)
@@ -140,6 +186,41 @@ class InspectionPlan:
     timings: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
     mesh: object = field(default=None, repr=False)
+
+    @property
+    def poses(self) -> np.ndarray:
+        """(h, 3 + nq) float: ``[x, y, theta, q]`` per pose of T."""
+        return self.pose_set.poses
+
+    @property
+    def pose_spot(self) -> np.ndarray:
+        """(h,) int: index into ``spots`` of each pose."""
+        return self.pose_set.spot
+
+    @property
+    def pose_kind(self) -> np.ndarray:
+        """(h,) str: ``"guard"`` or ``"nos"``."""
+        return self.pose_set.kind
+
+    @property
+    def pose_target(self) -> np.ndarray:
+        """(h,) int: element a guard looks at (-1 for NoS guards)."""
+        return self.pose_set.target
+
+    @property
+    def world_T_camera(self) -> np.ndarray:
+        """(h, 4, 4) float: camera pose of each pose."""
+        return self.pose_set.world_T_camera
+
+    @property
+    def maneuverability(self) -> np.ndarray:
+        """(h,) float: I_m of each configuration."""
+        return self.pose_set.maneuverability
+
+    @property
+    def visible(self) -> np.ndarray:
+        """(h, n) bool: elements each pose observes."""
+        return self.pose_set.visible
 
     @property
     def n_spots(self) -> int:
@@ -196,8 +277,6 @@ class InspectionPlan:
 
     def to_json(self, path, timings: bool = False):
         """Write :meth:`to_dict` atomically as JSON."""
-        from ..io import write_json
-
         return write_json(self.to_dict(timings=timings), path)
 
     def to_html(self, path, robot=None):
@@ -205,9 +284,7 @@ class InspectionPlan:
         camera poses (guards blue, NoS guards orange) with lines to their targets, best gateways,
         and the robot at the first spot in its home configuration.
         """
-        from ..robots.models import load_robot
-        from ..viz import meshcat_scene as ms
-        from .spots import se2_matrices
+        from ..viz import meshcat_scene as ms  # meshcat: heavy, only for the export
 
         robot = load_robot(self.robot_name) if robot is None else robot
         world_T_spots = se2_matrices(self.spots) if len(self.spots) else np.zeros((0, 4, 4))
@@ -238,20 +315,21 @@ class InspectionPlan:
             return ms.save_html(vis, path)
 
 
+@contextlib.contextmanager
+def _timed(timings: dict, stage: str):
+    """Record the wall time of a block as ``timings[stage]``, s."""
+    t0 = time.perf_counter()
+    yield
+    timings[stage] = time.perf_counter() - t0
+
+
 def _surface(mesh, spacing: float, seed: int):
     """S on the machine, without the faces standing on the floor (not exposed)."""
-    from ..geometry.surface import sample_surface
-
     s = sample_surface(mesh, spacing, seed=seed)
-    on_floor = (s.points[:, 2] <= 1e-6) & (s.normals[:, 2] < -0.99)
-    return s.subset(~on_floor)
+    return s.subset(~on_floor(s.points[:, 2], s.normals[:, 2]))
 
 
 def _as_machine(mesh_or_machine):
-    import trimesh
-
-    from ..geometry.machines import Machine, machine_from_mesh
-
     if isinstance(mesh_or_machine, Machine):
         return mesh_or_machine
     if isinstance(mesh_or_machine, trimesh.Trimesh):
@@ -304,9 +382,6 @@ class OfflineContext:
         IK restarts draw from a generator seeded by ``(seed, row)``, so the result does not
         depend on which other spots were planned before.
         """
-        from . import guards as G
-        from .spots import se2_matrices
-
         if row not in self._guards:
             acc = self.accessible[row, self.targets] & self.clear[self.targets]
             rng = np.random.default_rng([self.params.seed, 1, row])
@@ -317,14 +392,24 @@ class OfflineContext:
 
     def select_guards(self, row: int, guard_params, covered):
         """Greedy guard selection at candidate spot ``row``, visibility results cached."""
-        from . import guards as G
-
         cache = self._visibility.setdefault((row, guard_params.visibility, guard_params.hpr_input), {})
         return G.select_guards(self.guard_candidates(row), self.points, self.normals, self.params.camera,
-                               guard_params, covered, self.vis_scene, cache)
+                               guard_params, covered=covered, vis_scene=self.vis_scene, cache=cache)
 
 
-def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None = None,
+def _accessible_candidates(machine, robot, rmap, points, normals, params: InspectionParams, vis_scene):
+    """Collision-free candidate spots (m, 3) and their accessible sets (m, n) bool."""
+    cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
+    cands = cands[SP.collision_free_spots(robot, machine.mesh, cands, margin=params.guard.collision_margin)]
+    if len(cands):
+        spot_vis = SP.spot_visibility(points, normals, cands, params.spot, camera=params.camera,
+                                      vis_scene=vis_scene)
+    else:
+        spot_vis = np.zeros((0, len(points)), dtype=bool)
+    return cands, SP.accessible_sets(rmap, cands, points, normals, spot_vis, params.camera)
+
+
+def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | None = None,
                     rmap=None) -> OfflineContext:
     """Stages of the offline pipeline that do not depend on the selection thresholds.
 
@@ -337,49 +422,25 @@ def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None
     rmap : ReachabilityMap, optional
         Default: built or loaded from the disk cache for ``robot`` and ``params.reach``.
     """
-    from ..robots.collision import CollisionChecker
-    from ..robots.models import ur10_mobile
-    from ..vision.visibility import VisibilityScene
-    from . import guards as G
-    from . import spots as SP
-    from .nos import raycasting_scene
-    from .reachability import reachability_map
-
     params = InspectionParams() if params is None else params
     if not isinstance(params, InspectionParams):
         raise ValueError(f"params must be an InspectionParams, got {type(params).__name__}")
     machine = _as_machine(mesh_or_machine)
-    mesh = machine.mesh
     robot = ur10_mobile() if robot is None else robot
     if robot.camera_frame is None:
         raise ValueError(f"robot {robot.name} has no camera_frame; MAVAC guards need a camera on the arm")
-    cam = params.camera
     timings = {}
-
-    t0 = time.perf_counter()
-    surf = _surface(mesh, params.surface_spacing, params.seed)
+    with _timed(timings, "surface"):
+        surf = _surface(machine.mesh, params.surface_spacing, params.seed)
     P, N = surf.points, surf.normals
-    timings["surface"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    rmap = reachability_map(robot, params.reach) if rmap is None else rmap
-    timings["reachability_map"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
-    cands = cands[SP.collision_free_spots(robot, mesh, cands, margin=params.guard.collision_margin)]
-    vis_scene = VisibilityScene(mesh)
-    if len(cands):
-        spot_vis = SP.spot_visibility(P, N, cands, params.spot.view_heights, params.spot.visibility,
-                                      vis_scene, cam.hpr_radius_factor)
-    else:
-        spot_vis = np.zeros((0, len(P)), dtype=bool)
-    acc = SP.accessible_sets(rmap, cands, P, N, spot_vis, cam)
-    timings["accessible_sets"] = time.perf_counter() - t0
-
-    scene = raycasting_scene(mesh)
-    clear = SP.guard_clearance(scene, P, N, cam.L_d)
-    checker = CollisionChecker(robot, mesh, margin=params.guard.collision_margin, floor=True)
+    with _timed(timings, "reachability_map"):
+        rmap = reachability_map(robot, params.reach) if rmap is None else rmap
+    vis_scene = VisibilityScene(machine.mesh)
+    with _timed(timings, "accessible_sets"):
+        cands, acc = _accessible_candidates(machine, robot, rmap, P, N, params, vis_scene)
+    scene = raycasting_scene(machine.mesh)
+    clear = SP.guard_clearance(scene, P, N, params.camera.L_d)
+    checker = CollisionChecker(robot, machine.mesh, margin=params.guard.collision_margin, floor=True)
     targets = G.guard_targets(P, N, params.guard.guard_spacing)
     return OfflineContext(machine, robot, params, P, N, cands, acc, clear, targets, scene, vis_scene,
                           checker, timings)
@@ -387,14 +448,86 @@ def prepare_offline(mesh_or_machine, robot=None, params: InspectionParams | None
 
 def _empty_plan(ctx, sel, timings, message) -> InspectionPlan:
     warnings.warn(message, stacklevel=3)
-    n, nq = len(ctx.points), ctx.robot.nq
+    poses = PoseSet.from_rows([], len(ctx.points), ctx.robot.nq)
     return InspectionPlan(ctx.machine.name, ctx.robot.name, ctx.params, ctx.points, ctx.normals,
-                          np.zeros((0, 3)), np.zeros((0, 3 + nq)), np.zeros(0, np.int64), np.zeros(0, dtype="<U5"),
-                          np.zeros(0, np.int64), np.zeros((0, 4, 4)), np.zeros(0), np.zeros((0, n), bool),
-                          sel, timings=timings, warnings=[message], mesh=ctx.machine.mesh)
+                          np.zeros((0, 3)), poses, sel, timings=timings, warnings=[message], mesh=ctx.machine.mesh)
 
 
-def plan_from_context(ctx: OfflineContext, params: InspectionParams | None = None,
+def _sweep_params(ctx: OfflineContext, params: InspectionParams | None) -> InspectionParams:
+    """``params`` for :func:`plan_from_context`: only the selection thresholds and NoS may differ."""
+    params = ctx.params if params is None else params
+    if not isinstance(params, InspectionParams):
+        raise ValueError(f"params must be an InspectionParams, got {type(params).__name__}")
+    g0 = ctx.params.guard
+    geometry = dataclasses.replace(params, spot=dataclasses.replace(params.spot, P_s=ctx.params.spot.P_s),
+                                   guard=dataclasses.replace(params.guard, P_g=g0.P_g, k1=g0.k1, k2=g0.k2,
+                                                             visibility=g0.visibility, hpr_input=g0.hpr_input),
+                                   nos=ctx.params.nos)
+    if geometry != ctx.params:
+        raise ValueError("params differ from the context's in more than spot.P_s, guard selection and nos: "
+                         "prepare a new context with prepare_offline(...)")
+    return params
+
+
+def spot_tour(selection: SpotSelection) -> tuple[np.ndarray, np.ndarray]:
+    """The selected spots in a short tour on the floor, starting with the first one selected.
+
+    Returns
+    -------
+    spots : (k, 3) float
+    rows : (k,) int
+        Their rows in ``selection.candidates``.
+    """
+    spots = selection.spots
+    tour = short_open_path(np.linalg.norm(spots[:, None, :2] - spots[None, :, :2], axis=2), 0)
+    return spots[tour], selection.greedy.selected[tour]
+
+
+def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = False) -> list:
+    """Greedy guard selection at each spot, in tour order (MAVAC, "Guard selection").
+
+    Elements seen by the guards of earlier spots are carried over as covered: they no longer
+    count as new for the guards of later spots.
+
+    Returns
+    -------
+    list of mavac.inspection.guards.GuardSelection, one per row
+    """
+    covered = np.zeros(len(ctx.points), dtype=bool)
+    selections = []
+    for row in tqdm(rows, desc="guards", disable=not progress, leave=False):
+        selection = ctx.select_guards(int(row), guard_params, covered)
+        covered = selection.greedy.covered
+        selections.append(selection)
+    return selections
+
+
+def _spot_poses(robot, k: int, spot, selection, nos) -> list:
+    """Rows of T at spot ``k``: its guards then its NoS guards, in a short joint-space order
+    from the home configuration."""
+    g = selection.guards
+    qs = [g.q[i] for i in range(len(g))] + [e.q for e in nos]
+    if not qs:
+        return []
+    Ts = [g.world_T_camera[i] for i in range(len(g))] + [e.world_T_camera for e in nos]
+    vs = [selection.visible[i] for i in range(len(g))] + [e.visible for e in nos]
+    kinds = ["guard"] * len(g) + ["nos"] * len(nos)
+    targets = g.target.tolist() + [-1] * len(nos)
+    Q = np.vstack([robot.q_home] + qs)
+    order = short_open_path(np.linalg.norm(Q[:, None] - Q[None], axis=2), 0)[1:] - 1
+    im = np.asarray(maneuverability(robot, np.asarray(qs)), dtype=float).reshape(-1)
+    return [(np.concatenate([spot, qs[i]]), k, kinds[i], targets[i], Ts[i], im[i], vs[i]) for i in order]
+
+
+def pose_set(robot, spots, selections, nos, n_elements: int) -> PoseSet:
+    """The pose set T: per spot in tour order, guards and NoS guards (:func:`_spot_poses`)."""
+    rows = []
+    for k, selection in enumerate(selections):
+        rows += _spot_poses(robot, k, spots[k], selection, [e for e in nos if e.spot == k])
+    return PoseSet.from_rows(rows, n_elements, robot.nq)
+
+
+def plan_from_context(ctx: OfflineContext, params: InspectionParams | None = None, *,
                       progress: bool = False) -> InspectionPlan:
     """Spot and guard selection, NoS guards and the ordered pose set T on a prepared context.
 
@@ -408,128 +541,27 @@ def plan_from_context(ctx: OfflineContext, params: InspectionParams | None = Non
     progress : bool
         tqdm progress over the spots.
     """
-    from tqdm.auto import tqdm
-
-    from ..robots.kinematics import fk, maneuverability
-    from . import guards as G
-    from . import spots as SP
-    from .nos import nos_clusters, spot_along_direction
-
-    params = ctx.params if params is None else params
-    if not isinstance(params, InspectionParams):
-        raise ValueError(f"params must be an InspectionParams, got {type(params).__name__}")
-    g0 = ctx.params.guard
-    geometry = dataclasses.replace(params, spot=dataclasses.replace(params.spot, P_s=ctx.params.spot.P_s),
-                                   guard=dataclasses.replace(params.guard, P_g=g0.P_g, k1=g0.k1, k2=g0.k2,
-                                                             visibility=g0.visibility, hpr_input=g0.hpr_input),
-                                   nos=ctx.params.nos)
-    if geometry != ctx.params:
-        raise ValueError("params differ from the context's in more than spot.P_s, guard selection and nos: "
-                         "prepare a new context with prepare_offline(...)")
-    timings = dict(ctx.timings)
-    P, N, cam = ctx.points, ctx.normals, params.camera
-
-    t0 = time.perf_counter()
-    sel = SP.select_spots(ctx.accessible, ctx.candidates, params.spot.P_s)
-    timings["spot_selection"] = time.perf_counter() - t0
+    params = _sweep_params(ctx, params)
+    timings, n = dict(ctx.timings), len(ctx.points)
+    with _timed(timings, "spot_selection"):
+        sel = SP.select_spots(ctx.accessible, ctx.candidates, params.spot.P_s)
     if len(sel.greedy.selected) == 0:
         return _empty_plan(ctx, sel, timings,
                            f"no spot can access any surface element of {ctx.machine.name!r} "
                            f"({len(ctx.candidates)} collision-free candidate spots): empty plan, C = 0")
-
-    # spots in a short tour on the floor, starting with the first one selected
-    spots = sel.spots
-    tour = short_open_path(np.linalg.norm(spots[:, None, :2] - spots[None, :, :2], axis=2), 0)
-    spots = spots[tour]
-    rows = sel.greedy.selected[tour]
-    world_T_bases = SP.se2_matrices(spots)
-
-    t0 = time.perf_counter()
-    covered = np.zeros(len(P), dtype=bool)
-    per_spot = []
-    for k in tqdm(range(len(spots)), desc="guards", disable=not progress, leave=False):
-        s_k = ctx.select_guards(int(rows[k]), params.guard, covered)
-        covered = s_k.greedy.covered
-        per_spot.append(s_k)
-    timings["guards"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    nos_per_spot = [[] for _ in spots]
-    clusters, attempts = [], []
-    if params.nos.enabled:
-        from ..planning.rrt import plan_rrt_connect
-
-        pn = params.nos
-        clusters = nos_clusters(ctx.machine.mesh, P, N, covered, pn.eps_factor * params.surface_spacing,
-                                pn.min_samples, pn.n_rays,
-                                pn.ray_length, pn.origin_offset, scene=ctx.scene)
-        robot, checker = ctx.robot, ctx.checker
-        for c in clusters:
-            gw = c.best_gateway
-            if gw is None:
-                continue
-            k = spot_along_direction(spots[:, :2], c.origin, gw.direction)
-            rng = np.random.default_rng([params.seed, 2, c.label])
-            # the gateway's rays closest to its exit direction, best first: the camera sits L_d
-            # out along the first one that has a collision-free IK solution
-            rays = gw.ray_directions[np.argsort(-(gw.ray_directions @ gw.direction), kind="stable")[:pn.max_ray_tries]]
-            ok, q, _ = G.camera_configurations(robot, checker, world_T_bases[k], c.origin + cam.L_d * rays, -rays, rng)
-            rec = {"cluster": int(c.label), "n_elements": int(len(c.members)), "spot": int(k),
-                   "n_rays": gw.n_rays, "ik": bool(ok.any()), "solved": False, "reason": "no collision-free IK",
-                   "seconds": 0.0}
-            if ok.any():
-                q_goal = q[int(np.argmax(ok))]
-                checker.set_base(world_T_bases[k])
-                res = plan_rrt_connect(lambda qq: not bool(checker.in_collision(qq)), robot.q_home, q_goal,
-                                       robot.q_lower, robot.q_upper, time_limit=pn.rrt_time_limit,
-                                       seed=int(rng.integers(2**31 - 1)), resolution=pn.rrt_resolution,
-                                       max_iterations=pn.rrt_max_iterations)
-                rec.update(solved=bool(res.solved), reason=res.reason, seconds=float(res.seconds))
-                if res.solved:
-                    T = world_T_bases[k] @ fk(robot, q_goal, robot.camera_frame)
-                    vis = G.guard_visibility(T[None], P, N, cam, params.guard, ctx.vis_scene)[0]
-                    nos_per_spot[k].append((q_goal, T, vis))
-            attempts.append(rec)
-    timings["nos"] = time.perf_counter() - t0
-
-    # T: per spot, guards then NoS guards, in a short joint-space order from the home configuration
-    out = {key: [] for key in ("rows", "spot", "kind", "target", "cam", "im", "vis")}
-    for k in range(len(spots)):
-        g = per_spot[k].guards
-        extra = nos_per_spot[k]
-        qs = [g.q[i] for i in range(len(g))] + [e[0] for e in extra]
-        if not qs:
-            continue
-        Ts = [g.world_T_camera[i] for i in range(len(g))] + [e[1] for e in extra]
-        vs = [per_spot[k].visible[i] for i in range(len(g))] + [e[2] for e in extra]
-        kinds = ["guard"] * len(g) + ["nos"] * len(extra)
-        tg = g.target.tolist() + [-1] * len(extra)
-        Q = np.vstack([ctx.robot.q_home] + qs)
-        order = short_open_path(np.linalg.norm(Q[:, None] - Q[None], axis=2), 0)[1:] - 1
-        im = np.asarray(maneuverability(ctx.robot, np.asarray(qs)), dtype=float).reshape(-1)
-        for i in order:
-            out["rows"].append(np.concatenate([spots[k], qs[i]]))
-            out["spot"].append(k)
-            out["kind"].append(kinds[i])
-            out["target"].append(tg[i])
-            out["cam"].append(Ts[i])
-            out["im"].append(im[i])
-            out["vis"].append(vs[i])
-    n, nq = len(P), ctx.robot.nq
-    visible = np.array(out["vis"], dtype=bool).reshape(-1, n)
-    kinds = np.array(out["kind"], dtype="<U5")
-    C, O = coverage_overlap(visible, n)
-    Cg, Og = coverage_overlap(visible[kinds == "guard"], n)
-    return InspectionPlan(
-        ctx.machine.name, ctx.robot.name, params, P, N, spots,
-        np.array(out["rows"], dtype=float).reshape(-1, 3 + nq), np.array(out["spot"], dtype=np.int64), kinds,
-        np.array(out["target"], dtype=np.int64), np.array(out["cam"], dtype=float).reshape(-1, 4, 4),
-        np.array(out["im"], dtype=float), visible, sel, clusters, attempts, C, O, Cg, Og, timings, [],
-        ctx.machine.mesh,
-    )
+    spots, rows = spot_tour(sel)
+    with _timed(timings, "guards"):
+        selections = guards_at_spots(ctx, rows, params.guard, progress=progress)
+    with _timed(timings, "nos"):
+        clusters, nos, attempts = nos_guards(ctx, spots, selections[-1].greedy.covered, params)
+    poses = pose_set(ctx.robot, spots, selections, nos, n)
+    C, O = coverage_overlap(poses.visible, n)
+    Cg, Og = coverage_overlap(poses.visible[poses.kind == "guard"], n)
+    return InspectionPlan(ctx.machine.name, ctx.robot.name, params, ctx.points, ctx.normals, spots, poses, sel,
+                          clusters, attempts, C, O, Cg, Og, timings, [], ctx.machine.mesh)
 
 
-def plan_inspection(mesh_or_machine, robot=None, params: InspectionParams | None = None, rmap=None,
+def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | None = None, rmap=None,
                     progress: bool = False) -> InspectionPlan:
     """MAVAC offline computation: spots, guards, NoS guards and the ordered pose set T.
 

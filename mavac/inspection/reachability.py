@@ -29,11 +29,8 @@ import numpy as np
 from ..geometry.transforms import points_in_frame, vectors_in_frame
 from ..params import ReachabilityMapParams
 from ..validate import check_points
+from ..vision.camera import OPTICAL_AXIS
 from .nos import sphere_directions
-
-#: Column of the camera frame's rotation that is MAVAC's optical axis (camera x, see
-#: :class:`mavac.params.CameraParams`); ``ik_axis(..., frame=camera_frame, frame_axis=OPTICAL_AXIS)``.
-OPTICAL_AXIS = 0
 
 
 @dataclass(frozen=True)

@@ -27,8 +27,11 @@ import numpy as np
 from ..geometry.transforms import se2_matrices
 from ..params import CameraParams, SpotParams
 from ..planning.greedy import GreedyResult, greedy_select
+from ..robots.collision import CollisionChecker
 from ..validate import check_points
+from ..vision.visibility import hpr_visible
 from .coverage import coverage_overlap
+from .nos import first_hit_distance
 
 
 def _ring(footprint: np.ndarray, distance: float, step: float) -> tuple[np.ndarray, np.ndarray]:
@@ -123,8 +126,6 @@ def candidate_spots(footprint, params: SpotParams, rng: np.random.Generator) -> 
 
 def collision_free_spots(robot, mesh, poses, margin: float = 0.0) -> np.ndarray:
     """Which base poses leave the robot, in its home configuration, clear of the machine, (m,) bool."""
-    from ..robots.collision import CollisionChecker
-
     checker = CollisionChecker(robot, mesh, margin=margin, floor=True)
     free = np.zeros(len(poses), dtype=bool)
     for i, T in enumerate(se2_matrices(poses)):
@@ -144,39 +145,36 @@ def guard_clearance(scene, points, normals, distance: float, offset: float = 1e-
     distance : float, m
         Guard stand-off (``L_d``).
     """
-    from .nos import first_hit_distance
-
     t = first_hit_distance(scene, points + offset * normals, normals)
     return t >= distance - offset
 
 
-def spot_visibility(points, normals, poses, heights, method: str = "hpr", vis_scene=None,
-                    radius_factor: float | None = None) -> np.ndarray:
-    """Elements visible from a viewpoint above each spot, at any of ``heights``, (m, n) bool.
+def spot_visibility(points, normals, poses, params: SpotParams, *, camera: CameraParams = CameraParams(),
+                    vis_scene=None) -> np.ndarray:
+    """Elements visible from a viewpoint above each spot, at any of ``params.view_heights``, (m, n) bool.
 
     Parameters
     ----------
     points, normals : (n, 3) float
     poses : (m, 3) float
         SE(2) spots.
-    heights : sequence of float, m
-    method : {"hpr", "raycast"}
+    params : SpotParams
+        ``view_heights`` (m) and ``visibility`` ("hpr" or "raycast").
+    camera : CameraParams
+        HPR radius factor.
     vis_scene : mavac.vision.visibility.VisibilityScene
         Required for ``"raycast"``.
     """
-    from ..vision.visibility import hpr_visible
-
     poses = check_points("poses", poses)
+    heights = params.view_heights
     views = np.array([[x, y, h] for x, y, _ in poses for h in heights], dtype=float)
-    if method == "raycast":
+    if params.visibility == "raycast":
         if vis_scene is None:
-            raise ValueError("vis_scene is required for method='raycast'")
+            raise ValueError("vis_scene is required for visibility='raycast'")
         vis = vis_scene.visible(points, normals, views)
-    elif method == "hpr":
-        kw = {} if radius_factor is None else {"radius_factor": radius_factor}
-        vis = np.array([hpr_visible(points, v, **kw) for v in views]).reshape(len(views), len(points))
     else:
-        raise ValueError(f"method must be 'hpr' or 'raycast', got {method!r}")
+        vis = np.array([hpr_visible(points, v, radius_factor=camera.hpr_radius_factor) for v in views])
+        vis = vis.reshape(len(views), len(points))
     return vis.reshape(len(poses), len(heights), len(points)).any(axis=1)
 
 

@@ -25,6 +25,10 @@ from ..params import CameraParams
 from ..tolerances import FAR_PLANE_RTOL, PARALLEL_TOL
 from ..validate import check_points, check_positive
 
+#: Column of the camera frame's rotation that is MAVAC's optical axis (camera x, see
+#: :class:`mavac.params.CameraParams`); ``ik_axis(..., frame=camera_frame, frame_axis=OPTICAL_AXIS)``.
+OPTICAL_AXIS = 0
+
 # Cameras x points evaluated per block in fov_masks: bounds the (block, n, 3) temporaries.
 _FOV_BLOCK_ELEMENTS = 2_000_000
 
