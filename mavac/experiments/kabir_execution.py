@@ -1,47 +1,24 @@
-"""Notebook 09: Kabir et al.'s execution stage -- tool paths (Sec. VI, Fig. 3), stain
-perception (Sec. VII, Figs. 4-5) and ICP registration (Sec. VII), on our simulated parts.
+"""Notebook 09: tables and figures of Kabir et al.'s execution stage -- tool paths (Sec. VI,
+Fig. 3), stain perception (Sec. VII, Figs. 4-5) and ICP registration (Sec. VII).
 
-Each function returns plain data (DataFrames, arrays, dataclasses) or draws on matplotlib
-axes it is given; the notebook only calls them, saves the figures and writes the CSVs.
+The pipeline itself is in the library (:mod:`mavac.scrubbing.execution`, :mod:`mavac.vision.icp`);
+each function here turns its results into a DataFrame or draws them on matplotlib axes it is
+given, so the notebook only calls, saves and shows.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ..params import ICPParams, LissajousParams, ScrubModel, SetupSpaceParams, ToolpathParams
-from ..scrubbing.toolpath import ToolPath, reachable_from_robot, toolpath_for_setup
-
-
-# ---------------------------------------------------------------- setups and tool paths
-
-
-def setup_toolpaths(part, setups, patches, robot, params: ToolpathParams = ToolpathParams(),
-                    space: SetupSpaceParams = SetupSpaceParams()) -> list[ToolPath]:
-    """Tool path of every setup of a plan.
-
-    Parameters
-    ----------
-    part : Part
-    setups : (k, 3) float
-        ``(x, y, alpha)`` in execution order (e.g. ``SetupPlan.setups``).
-    patches : list of (k_j,) int
-        Patches each setup cleans (e.g. ``SetupPlan.patches``).
-    robot : RobotModel
-        IK of every waypoint (world = robot base frame).
-    params : ToolpathParams
-    space : SetupSpaceParams
-        Pose of the part for a setup (:func:`mavac.setups.reach.base_T_part`).
-    """
-    from ..setups.reach import base_T_part
-
-    poses = base_T_part(np.asarray(setups, dtype=float).reshape(-1, 3), space)
-    reachable = reachable_from_robot(robot)
-    return [toolpath_for_setup(part, T, np.asarray(p, dtype=np.int64), params, reachable=reachable)
-            for T, p in zip(poses, patches)]
+from ..paper import paper_scalar
+from ..params import ICPParams, LissajousParams
+from ..planning.setcover import execution_time_area_passes
+from ..scrubbing.execution import StainPerception, cover_from_patches
+from ..scrubbing.toolpath import ToolPath
+from ..vision.icp import icp_error_study, icp_summary
+from ..viz.plots import plot_mesh
 
 
 def toolpath_table(part_name: str, toolpaths: list[ToolPath]) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -79,12 +56,8 @@ def execution_time_models(part, patches, toolpaths: list[ToolPath]) -> pd.DataFr
     DataFrame
         ``setup, t_e_toolpath_s, t_contact_s, t_reposition_s, t_e_area_model_s, ratio``.
     """
-    from ..planning.setcover import execution_time_area_passes
-
     params = toolpaths[0].params
-    cover = np.zeros((len(patches), len(part.stain_faces)), dtype=bool)
-    for j, p in enumerate(patches):
-        cover[j, np.asarray(p, dtype=np.int64)] = True
+    cover = cover_from_patches(patches, len(part.stain_faces))
     area = execution_time_area_passes(cover, part.patch_areas, part.passes,
                                       params.tool_width_m * params.tool_speed_m_s)
     te = np.array([tp.t_execution_s for tp in toolpaths])
@@ -94,17 +67,8 @@ def execution_time_models(part, patches, toolpaths: list[ToolPath]) -> pd.DataFr
                              t_e_area_model_s=area, ratio=te / area))
 
 
-def longest_segment(toolpath: ToolPath, pass_number: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """The longest contact segment of a pass and its normals (for the Fig. 3 overlay)."""
-    p = toolpath.passes[pass_number - 1]
-    i = int(np.argmax([len(s) for s in p.segments]))
-    return p.segments[i], p.normals[i]
-
-
 def plot_toolpath(ax, part, toolpath: ToolPath, title: str = ""):
     """Part surface, contact segments (one colour per pass) and repositioning moves on a 3-D axis."""
-    from ..viz.plots import plot_mesh
-
     mesh = part.mesh.copy()
     mesh.apply_transform(toolpath.world_T_part)
     colours = np.full((len(mesh.faces), 4), (0.8, 0.8, 0.82, 1.0))
@@ -144,60 +108,6 @@ def plot_overlay(ax, segment: np.ndarray, overlay, speed: float, length: float =
 # ---------------------------------------------------------------- stain perception
 
 
-
-class StainPerception(NamedTuple):
-    """Figs. 4-5 on a simulated part (images are (H, W, 3) uint8, masks (H, W) bool)."""
-
-    before: np.ndarray
-    after: np.ndarray
-    mask_before: np.ndarray
-    mask_after: np.ndarray
-    region: np.ndarray
-    cleaning_performance: float
-    passes_estimated: np.ndarray
-    passes_true: np.ndarray
-    passes_agreement: float
-
-
-def stain_perception(part, rng: np.random.Generator, params: LissajousParams = LissajousParams(),
-                     image_size=(128, 128), n_clusters: int = 4, noise_std: float = 0.02,
-                     model: ScrubModel = ScrubModel()) -> StainPerception:
-    """One SIMULATED scrubbing pass seen by the camera, segmented like Kabir Sec. VII.
-
-    The stain (per-face intensity, as thickness in layers) is rendered before and after
-    :func:`mavac.sim.wear.scrub_faces`; one 2-cluster K-means gives both binary masks and
-    ``C_p`` over the stained region; ``N_c``-colour quantisation of the before image (3x3
-    median filtered against pixel noise, as the binary masks are) gives the passes per pixel
-    (Fig. 5), compared with the part's own passes (pixels of stained faces; the clean part
-    is 0 passes).
-    """
-    import cv2
-
-    from ..sim.wear import scrub_faces, stain_opacity
-    from ..vision.stain import (cleaning_performance, face_index_image, passes_from_image,
-                                render_stain_image, stain_masks_kmeans, view_of_faces)
-
-    mesh = part.mesh
-    stain = np.zeros(len(mesh.faces))
-    stain[part.stain_faces] = part.intensity
-    view = view_of_faces(mesh, part.stain_faces)
-    fi = face_index_image(mesh, view, image_size)
-    on_part = fi >= 0
-    after = scrub_faces(stain, params, rng=rng, model=model)
-    images = [render_stain_image(mesh, stain_opacity(s, model), view, image_size, noise_std=noise_std,
-                                 rng=rng, face_index=fi) for s in (stain, after)]
-    seed = int(rng.integers(2**31 - 1))
-    m_before, m_after = stain_masks_kmeans(images, seed, region_mask=on_part)
-    face_passes = np.zeros(len(mesh.faces), dtype=int)
-    face_passes[part.stain_faces] = part.passes
-    true = np.where(on_part, face_passes[np.where(on_part, fi, 0)], -1)
-    region = on_part & (true > 0)
-    est = passes_from_image(cv2.medianBlur(images[0], 3), n_clusters=n_clusters, seed=seed, region_mask=on_part)
-    agreement = float(np.mean(est[on_part] == true[on_part]))
-    return StainPerception(images[0], images[1], m_before, m_after, region,
-                           cleaning_performance(m_before, m_after, region), est, true, agreement)
-
-
 def passes_confusion(sp: StainPerception) -> pd.DataFrame:
     """Fraction of the part's pixels needing ``true`` passes that Fig. 5's quantisation assigns
     ``estimated`` passes (rows sum to 1)."""
@@ -219,8 +129,6 @@ def plot_fig4(axes, sp: StainPerception):
 
 def plot_fig5(axes, sp: StainPerception):
     """Kabir Fig. 5: the stain image, its N_c-colour quantisation into passes, and our true passes."""
-    import matplotlib.pyplot as plt
-
     cmap = plt.get_cmap("viridis", int(max(sp.passes_estimated.max(), sp.passes_true.max())) + 2)
     for ax, (img, title) in zip(axes, [(sp.before, "stain image"),
                                        (sp.passes_estimated, "passes from N_c colours"),
@@ -239,8 +147,6 @@ def plot_fig5(axes, sp: StainPerception):
 def icp_tables(mesh, n_poses: int, noise_levels, init_perturbations, seed: int = 0,
                params: ICPParams = ICPParams(), n_points: int = 2000) -> tuple[pd.DataFrame, pd.DataFrame]:
     """:func:`mavac.vision.icp.icp_error_study` and its per-condition summary (basin of convergence)."""
-    from ..vision.icp import icp_error_study, icp_summary
-
     study = icp_error_study(mesh, n_poses, noise_levels, init_perturbations, np.random.default_rng(seed),
                             params, n_points=n_points)
     return study, icp_summary(study)
@@ -266,8 +172,6 @@ def paper_vs_ours(part_name: str, setup_table: pd.DataFrame, lissajous: Lissajou
     Rows: setups in the solution (Table VII), passes of setup 1 and of the other setups
     (Sec. IX-C), and the Fig. 3 overlay parameters we use.
     """
-    from ..paper import paper_scalar
-
     passes = setup_table["passes"].to_numpy(dtype=float)
     rows = [
         ("Table VII", "solution_size", f"part={part_name}", float(len(setup_table))),

@@ -15,12 +15,13 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from mavac.paper import paper_scalar
-from mavac.params import OPERATION_PARAMS, GPRParams, ScrubModel
-from mavac.parallel import map_trials
-from mavac.scrubbing.gpr import (dense_optimum, experiments_to_reach, learn_parameters, objective,
-                              random_search)
-from mavac.sim.wear import ScrubExperiment, stain_hardness
+from ..geometry.parts import load_part
+from ..paper import paper_scalar
+from ..parallel import map_trials
+from ..params import OPERATION_PARAMS, GPRParams
+from ..scrubbing import execution
+from ..scrubbing.gpr import dense_optimum, experiments_to_reach, learn_parameters, objective, random_search
+from ..sim.wear import ScrubExperiment
 
 PARTS = ("bowl", "hull")
 _REF = "Sec. IX-C GPR"
@@ -38,15 +39,9 @@ def gpr_params_for(part: str, **changes) -> GPRParams:
 
 @functools.lru_cache(maxsize=8)
 def scrub_experiment(part: str, seed: int = 0) -> ScrubExperiment:
-    """The simulated black box for ``part``: its stain (intensity as thickness) and a
-    per-face hardness drawn from ``seed``. Cached per process."""
-    from mavac.geometry.parts import load_part
-
-    p = load_part(part, seed=seed)
-    face_stain = np.zeros(len(p.mesh.faces))
-    face_stain[p.stain_faces] = p.intensity
-    hardness = stain_hardness(len(face_stain), np.random.default_rng([seed, 1]), ScrubModel())
-    return ScrubExperiment(p.mesh, face_stain, hardness)
+    """:func:`mavac.scrubbing.execution.scrub_experiment` of the package's part ``part`` (stain
+    drawn from ``seed``, hardness from ``(seed, 1)``). Cached per process."""
+    return execution.scrub_experiment(load_part(part, seed=seed), np.random.default_rng([seed, 1]))
 
 
 @functools.lru_cache(maxsize=8)

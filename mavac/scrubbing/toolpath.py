@@ -156,6 +156,12 @@ class ToolPath:
         """(n_passes,) per-pass coverage (see :class:`PassPath`)."""
         return np.array([p.coverage for p in self.passes], dtype=float)
 
+    def longest_segment(self, pass_number: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """The longest contact segment of pass ``pass_number`` (by point count) and its normals."""
+        p = self.passes[pass_number - 1]
+        i = int(np.argmax([len(s) for s in p.segments]))
+        return p.segments[i], p.normals[i]
+
 
 def _polyline_length(points: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum()) if len(points) > 1 else 0.0

@@ -206,11 +206,31 @@ def measure_cp(part_mesh: trimesh.Trimesh, face_stain, params: LissajousParams,
                            noise_std if rng is not None else 0.0, rng, kmeans_seed)
 
 
+def render_stain_states(mesh: trimesh.Trimesh, states, face_index, *, model: ScrubModel = ScrubModel(),
+                        noise_std: float = 0.02, rng: np.random.Generator | None = None) -> list:
+    """Camera images of several stain states of one part (thickness seen through
+    :func:`stain_opacity`), rendered in order with pixel noise from ``rng``.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+    states : sequence of (F,) float
+        Stain thickness per face (layers), e.g. before and after a pass.
+    face_index : (H, W) int
+        :func:`mavac.vision.stain.face_index_image` of the view.
+
+    Returns
+    -------
+    list of (H, W, 3) uint8
+    """
+    return [render_stain_image(mesh, stain_opacity(s, model), None, face_index.shape,
+                               noise_std=noise_std, rng=rng, face_index=face_index)
+            for s in states]
+
+
 def _cp_from_images(mesh, before, after, face_index, model, noise_std, rng, kmeans_seed) -> float:
     """Render both stain states, segment them with one K-means, C_p over the stained pixels."""
-    images = [render_stain_image(mesh, stain_opacity(s, model), None, face_index.shape,
-                                 noise_std=noise_std, rng=rng, face_index=face_index)
-              for s in (before, after)]
+    images = render_stain_states(mesh, (before, after), face_index, model=model, noise_std=noise_std, rng=rng)
     on_part = face_index >= 0
     region = on_part & (before[np.where(on_part, face_index, 0)] > 0)
     before_mask, after_mask = stain_masks_kmeans(images, kmeans_seed, region_mask=on_part)
