@@ -83,7 +83,7 @@ def table_vi_sweep(t_max: float):
         for algorithm, bound in ((2, "lb"), (4, "b")):
             params = dataclasses.replace(SetupPlannerParams(), algorithm=algorithm, bound=bound,
                                          t_max=t_max)
-            res = dfbnb_setup_cover(cover, costs, area, params)
+            res = dfbnb_setup_cover(cover, costs, patch_area=area, params=params)
             flag = "" if not res.timed_out else " (T_max)"
             row.append(f"{res.node_expansions}, {len(res.setups)}, {res.seconds:.2f}{flag}, "
                        f"{(res.cost - ref.cost) / ref.cost:.1e}")
@@ -107,7 +107,7 @@ def main():
 
     params = dataclasses.replace(SetupPlannerParams(), algorithm=2, bound="lb", guiding=True,
                                  pruning=True, t_max=t_max)
-    alg2 = dfbnb_setup_cover(cover, costs, area, params)
+    alg2 = dfbnb_setup_cover(cover, costs, patch_area=area, params=params)
     finished = not alg2.timed_out
     gap = (alg2.cost - milp.cost) / milp.cost if milp.cost > 0 else 0.0
     print(f"Algorithm 2 (eq. 2, guiding + pruning), T_max = {t_max:.0f} s: "
@@ -116,7 +116,7 @@ def main():
           f"gap to certificate {gap:.2e}")
 
     t0 = time.perf_counter()
-    alg4 = dfbnb_setup_cover(cover, costs, area, dataclasses.replace(params, algorithm=4, bound="b"))
+    alg4 = dfbnb_setup_cover(cover, costs, patch_area=area, params=dataclasses.replace(params, algorithm=4, bound="b"))
     gap4 = (alg4.cost - milp.cost) / milp.cost if milp.cost > 0 else 0.0
     print(f"Algorithm 4 (eq. 7, IESS {alg4.iess}, N_repeat {alg4.n_repeat}): "
           f"{'finished' if not alg4.timed_out else 'aborted at T_max'}, cost {alg4.cost:.3f} s, "

@@ -83,9 +83,9 @@ def main():
     print(f"concave bowl: {targets.n_patches} patches, {targets.n_targets} (vertex, normal) targets, "
           f"{len(setups)} setups -> {queries} vertex queries")
 
-    patch_reach(robot, targets, setups[:2], space, params)  # warm-up
+    patch_reach(robot, targets, setups[:2], space, params=params)  # warm-up
     t0 = time.perf_counter()
-    cover = patch_reach(robot, targets, setups, space, params)
+    cover = patch_reach(robot, targets, setups, space, params=params)
     batched = time.perf_counter() - t0
     rate_batched = queries / batched
     print(f"batched reach test: {batched:.3f} s, {rate_batched:,.0f} vertex queries/s, "
@@ -109,7 +109,7 @@ def main():
     print(f"RATIO reach_test_vs_per_point_dls {rate_batched / rate_dls:.1f}")
 
     if not args.no_sweep:
-        reach = PartReach(robot, targets, space, params)
+        reach = PartReach(robot, targets, space, params=params)
         t0 = time.perf_counter()
         full = reach_sweep(reach, grid, n_jobs=args.jobs)
         sweep = time.perf_counter() - t0

@@ -11,7 +11,7 @@ import os
 from typing import Callable, Iterable, Sequence
 
 
-def map_trials(fn: Callable, items: Iterable, n_jobs: int | None = None, backend: str | None = None,
+def map_trials(fn: Callable, items: Iterable, *, n_jobs: int | None = None, backend: str | None = None,
                desc: str | None = None, progress: bool = True) -> list:
     """Apply ``fn`` to every item, in parallel, and return the results in item order.
 

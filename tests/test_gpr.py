@@ -42,7 +42,7 @@ def test_dense_optimum_of_analytic_model():
 def test_gpr_reaches_known_optimum_within_budget():
     black_box = Analytic(FAST)
     opt = dense_optimum(black_box.mean, FAST)
-    result = learn_parameters(black_box, FAST, np.random.default_rng(0))
+    result = learn_parameters(black_box, FAST, rng=np.random.default_rng(0))
     assert result.experiments <= FAST.max_experiments
     reach = experiments_to_reach(result.history, opt, tol=0.05)
     assert reach is not None and reach <= FAST.max_experiments
@@ -56,7 +56,7 @@ def test_gpr_reaches_known_optimum_within_budget():
 
 def test_unreachable_threshold_is_infeasible_within_budget():
     params = dataclasses.replace(FAST, Cp_th=0.99, max_experiments=45)
-    result = learn_parameters(Analytic(params), params, np.random.default_rng(1))
+    result = learn_parameters(Analytic(params), params, rng=np.random.default_rng(1))
     assert not result.feasible and result.chosen is None
     assert result.experiments <= params.max_experiments
     assert experiments_to_reach(result.history, dense_optimum(Analytic(params).mean, params)) is None
@@ -64,16 +64,16 @@ def test_unreachable_threshold_is_infeasible_within_budget():
 
 def test_same_seed_same_result():
     params = dataclasses.replace(FAST, max_experiments=36)
-    a = learn_parameters(Analytic(params), params, np.random.default_rng(3))
-    b = learn_parameters(Analytic(params), params, np.random.default_rng(3))
+    a = learn_parameters(Analytic(params), params, rng=np.random.default_rng(3))
+    b = learn_parameters(Analytic(params), params, rng=np.random.default_rng(3))
     assert a.history.equals(b.history) and a.chosen == b.chosen
-    r1 = random_search(Analytic(params), params, 20, np.random.default_rng(4))
-    r2 = random_search(Analytic(params), params, 20, np.random.default_rng(4))
+    r1 = random_search(Analytic(params), params, budget=20, rng=np.random.default_rng(4))
+    r2 = random_search(Analytic(params), params, budget=20, rng=np.random.default_rng(4))
     assert r1.history.equals(r2.history) and r1.experiments == 20
 
 
 def test_random_search_stays_in_bounds():
-    r = random_search(Analytic(FAST), FAST, 50, np.random.default_rng(0))
+    r = random_search(Analytic(FAST), FAST, budget=50, rng=np.random.default_rng(0))
     X = r.history[["v", "f_n", "kappa", "f_x", "A_x"]].to_numpy()
     assert np.all(X >= np.array(FAST.lower)) and np.all(X <= np.array(FAST.upper))
 
@@ -97,7 +97,7 @@ def test_bad_params(field, value):
 
 def test_bad_call_arguments():
     with pytest.raises(ValueError, match="budget"):
-        random_search(Analytic(FAST), FAST, 0)
+        random_search(Analytic(FAST), FAST, budget=0)
     with pytest.raises(ValueError, match="points_per_axis"):
         dense_optimum(Analytic(FAST).mean, FAST, points_per_axis=(5, 5, 5))
     with pytest.raises(ValueError, match="X"):

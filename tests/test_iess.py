@@ -110,7 +110,7 @@ def test_algorithm5_frequency_matches_eq5():
     """Monte Carlo: fraction of runs of Algorithm 5 returning q equals eq. 5 (seeded, fixed N)."""
     rng = np.random.default_rng(12345)
     n_repeat, runs = 10, 3000
-    hits = sum(initial_estimate_of_setup_size(UNIQUE, n_repeat, rng) == 3 for _ in range(runs))
+    hits = sum(initial_estimate_of_setup_size(UNIQUE, n_repeat, seed=rng) == 3 for _ in range(runs))
     expected = p_find_min_cover(3, 6, n_repeat)  # 1 - (19/20)^10 ~ 0.40
     sigma = math.sqrt(expected * (1 - expected) / runs)
     assert abs(hits / runs - expected) < 5 * sigma
@@ -119,7 +119,7 @@ def test_algorithm5_frequency_matches_eq5():
 def test_algorithm5_single_trial_frequency():
     rng = np.random.default_rng(7)
     runs = 4000
-    hits = sum(initial_estimate_of_setup_size(UNIQUE, 1, rng) == 3 for _ in range(runs))
+    hits = sum(initial_estimate_of_setup_size(UNIQUE, 1, seed=rng) == 3 for _ in range(runs))
     p = 1 / 20
     assert abs(hits / runs - p) < 5 * math.sqrt(p * (1 - p) / runs)
 

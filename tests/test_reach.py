@@ -77,7 +77,7 @@ def test_patch_reachable_iff_all_three_vertices_reachable():
     rng = np.random.default_rng(1)
     grid = uniform_setups(SPACE)
     setups = grid[rng.choice(len(grid), 12, replace=False)]
-    cover = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
+    cover = R.patch_reach(robot(), targets, setups, SPACE, params=PARAMS)
     per_vertex = vertex_reach(targets, setups, "closed_form")
     np.testing.assert_array_equal(cover, per_vertex[:, targets.patch_targets].all(axis=2))
     # the sample must exercise both outcomes and partially reachable patches
@@ -97,7 +97,7 @@ def test_batched_reach_agrees_with_per_point_dls():
     assert not np.any(dls & ~closed)
     # and DLS with restarts finds almost every solution the closed form finds
     assert (dls == closed).mean() >= 0.95
-    cover = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
+    cover = R.patch_reach(robot(), targets, setups, SPACE, params=PARAMS)
     np.testing.assert_array_equal(cover, closed[:, targets.patch_targets].all(axis=2))
 
 
@@ -105,15 +105,15 @@ def test_batches_of_any_size_give_the_same_answer():
     v, n = bowl_sample()
     targets = R.reach_targets(v, n)
     setups = uniform_setups(SPACE, (0.5, 0.5, np.radians(120)))
-    a = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
-    b = R.patch_reach(robot(), targets, setups, SPACE, ReachParams(batch_size=1000))
+    a = R.patch_reach(robot(), targets, setups, SPACE, params=PARAMS)
+    b = R.patch_reach(robot(), targets, setups, SPACE, params=ReachParams(batch_size=1000))
     np.testing.assert_array_equal(a, b)
     assert R.patch_reach(robot(), targets, np.zeros((0, 3)), SPACE).shape == (0, len(v))
 
 
 def test_counting_reach_counts_one_call_per_new_setup():
     v, n = bowl_sample()
-    reach = R.CountingReach(R.PartReach(robot(), R.reach_targets(v, n), SPACE, PARAMS))
+    reach = R.CountingReach(R.PartReach(robot(), R.reach_targets(v, n), SPACE, params=PARAMS))
     s = uniform_setups(SPACE, (0.5, 0.5, np.radians(120)))[:5]
     a = reach(s)
     b = reach(s[::-1])
@@ -126,11 +126,12 @@ def test_collision_option_only_removes_patches():
     part = load_part("concave_bowl")
     targets = R.reach_targets(v[::4], n[::4])
     setups = np.array([[0.2, 0.5, 0.0]])
-    free = R.patch_reach(robot(), targets, setups, SPACE, PARAMS)
-    checked = R.patch_reach(robot(), targets, setups, SPACE, ReachParams(check_collision=True), part.mesh)
+    free = R.patch_reach(robot(), targets, setups, SPACE, params=PARAMS)
+    checked = R.patch_reach(robot(), targets, setups, SPACE, params=ReachParams(check_collision=True),
+                            part_mesh=part.mesh)
     assert not np.any(checked & ~free)
     with pytest.raises(ValueError, match="part_mesh"):
-        R.patch_reach(robot(), targets, setups, SPACE, ReachParams(check_collision=True))
+        R.patch_reach(robot(), targets, setups, SPACE, params=ReachParams(check_collision=True))
 
 
 def test_reach_params_validate():
@@ -148,6 +149,6 @@ def test_a_box_far_away_is_unreachable_and_a_near_one_is_not():
     top = np.flatnonzero(box.face_normals[:, 2] > 0.9)
     targets = R.reach_targets(box.triangles[top], box.face_normals[top])
     far = dict(origin_x=5.0)
-    cover_far = R.patch_reach(robot(), targets, np.zeros((1, 3)), SetupSpaceParams(**far), PARAMS)
-    cover_near = R.patch_reach(robot(), targets, np.array([[0.2, 0.5, 0.0]]), SPACE, PARAMS)
+    cover_far = R.patch_reach(robot(), targets, np.zeros((1, 3)), SetupSpaceParams(**far), params=PARAMS)
+    cover_near = R.patch_reach(robot(), targets, np.array([[0.2, 0.5, 0.0]]), SPACE, params=PARAMS)
     assert not cover_far.any() and cover_near.all()

@@ -160,8 +160,8 @@ def test_uniform_sampling_counts_one_call_per_setup_and_removes_dominated():
 def test_hierarchical_sampling_covers_target_and_is_deterministic(variant):
     reach = toy_reach(n=60, seed=2)
     target = S.uniform_sampling(reach, COARSE_SPACE).cover.any(axis=0)
-    a = S.hierarchical_sampling(reach, SPACE, SAMP, variant, target=target)
-    b = S.hierarchical_sampling(reach, SPACE, SAMP, variant, target=target)
+    a = S.hierarchical_sampling(reach, SPACE, SAMP, variant=variant, target=target)
+    b = S.hierarchical_sampling(reach, SPACE, SAMP, variant=variant, target=target)
     assert a.covers_target == np.all(a.cover.any(axis=0)[target])
     np.testing.assert_array_equal(a.setups, b.setups)
     assert a.n_rfc == b.n_rfc and a.level == b.level
@@ -178,9 +178,9 @@ def test_random_sampling_covers_target_deterministically(variant):
     grid = S.uniform_setups(SPACE)
     look = S.lookup_reach(grid, reach(grid))
     target = look(grid).any(axis=0)
-    a = S.random_sampling(look, SPACE, SAMP, variant, seed=7, target=target)
-    b = S.random_sampling(look, SPACE, SAMP, variant, seed=7, target=target)
-    c = S.random_sampling(look, SPACE, SAMP, variant, seed=8, target=target)
+    a = S.random_sampling(look, SPACE, SAMP, variant=variant, seed=7, target=target)
+    b = S.random_sampling(look, SPACE, SAMP, variant=variant, seed=7, target=target)
+    c = S.random_sampling(look, SPACE, SAMP, variant=variant, seed=8, target=target)
     assert a.covers_target
     np.testing.assert_array_equal(a.setups, b.setups)
     assert a.n_rfc == b.n_rfc
@@ -192,6 +192,6 @@ def test_random_sampling_covers_target_deterministically(variant):
 def test_random_sampling_off_grid():
     reach = toy_reach(n=40, seed=6)
     samp = dataclasses.replace(SAMP, random_on_grid=False, max_random_samples=500)
-    res = S.random_sampling(reach, SPACE, samp, "C_XY", seed=1)
+    res = S.random_sampling(reach, SPACE, samp, variant="C_XY", seed=1)
     assert res.samples <= 500
     assert res.covers_target == bool(res.cover.any(axis=0).all())

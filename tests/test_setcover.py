@@ -57,7 +57,7 @@ def test_dfbnb_equals_brute_force_and_milp(inst):
     assert mi.optimal and mi.cost == pytest.approx(bf, rel=1e-9, abs=1e-12)
     assert is_cover(cover, mi.setups)
     for guiding in (True, False):
-        res = dfbnb_setup_cover(cover, costs, area, dataclasses.replace(P, guiding=guiding))
+        res = dfbnb_setup_cover(cover, costs, patch_area=area, params=dataclasses.replace(P, guiding=guiding))
         assert not res.timed_out
         assert res.cost == pytest.approx(bf, rel=1e-9, abs=1e-12)
         assert is_cover(cover, res.setups)
@@ -70,9 +70,9 @@ def test_without_pruning_same_optimum_more_nodes(inst):
     cover, costs, area = inst
     _, bf = brute_force_setup_cover(cover, costs)
     for guiding in (True, False):
-        on = dfbnb_setup_cover(cover, costs, area, dataclasses.replace(P, guiding=guiding))
-        off = dfbnb_setup_cover(cover, costs, area,
-                                dataclasses.replace(P, guiding=guiding, pruning=False))
+        on = dfbnb_setup_cover(cover, costs, patch_area=area, params=dataclasses.replace(P, guiding=guiding))
+        off = dfbnb_setup_cover(cover, costs, patch_area=area,
+                                params=dataclasses.replace(P, guiding=guiding, pruning=False))
         assert off.cost == pytest.approx(bf, rel=1e-9, abs=1e-12)
         # Pruning only cuts subtrees of the same depth-first tree.
         assert off.node_expansions >= on.node_expansions
@@ -100,7 +100,7 @@ def test_algorithm4_lb_finds_cheapest_minimum_size_cover(inst):
     # Eq. 5 for the worst q: Algorithm 5 misses the minimum with probability < 1e-9.
     n_repeat = n_repeat_recommended(m, 1 - 1e-9)
     params = dataclasses.replace(P, algorithm=4, bound="lb", n_repeat=n_repeat)
-    res = dfbnb_setup_cover(cover, costs, area, params)
+    res = dfbnb_setup_cover(cover, costs, patch_area=area, params=params)
     assert res.iess == q
     assert len(res.setups) == q and is_cover(cover, res.setups)
     _, best_q = brute_force_setup_cover(cover, costs, max_size=q)
@@ -116,7 +116,7 @@ def test_algorithm4_eq7_is_a_valid_cover_no_better_than_optimum(inst, t_decay, r
     _, bf = brute_force_setup_cover(cover, costs)
     params = dataclasses.replace(P, algorithm=4, bound="b", n_repeat=200, t_decay=t_decay,
                                  t_decay_rate=rate)
-    res = dfbnb_setup_cover(cover, costs, area, params)
+    res = dfbnb_setup_cover(cover, costs, patch_area=area, params=params)
     assert is_cover(cover, res.setups)
     assert res.cost >= bf - 1e-9
     assert len(res.setups) <= res.iess
@@ -209,7 +209,7 @@ def test_uncoverable_patches_are_listed(method):
 @given(instances())
 def test_solve_both_certifies_dfbnb(inst):
     cover, costs, area = inst
-    res = solve_setup_cover(cover, costs, area, params=P, method="both", setup_time=0.25)
+    res = solve_setup_cover(cover, costs, patch_area=area, params=P, method="both", setup_time=0.25)
     assert res.status in ("optimal", "empty")
     assert res.certificate_gap == pytest.approx(0.0, abs=1e-9)
     assert is_cover(cover, res.setups)

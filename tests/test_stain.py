@@ -33,7 +33,7 @@ def test_kmeans_mask_recovers_stain_region(sphere):
     stain = _cap_stain(sphere)
     view = view_of_faces(sphere, direction=[0, 0, -1.0])
     fi = face_index_image(sphere, view, (64, 64))
-    img = render_stain_image(sphere, stain, view, (64, 64), noise_std=0.03,
+    img = render_stain_image(sphere, stain, view, image_size=(64, 64), noise_std=0.03,
                              rng=np.random.default_rng(0), face_index=fi)
     assert img.dtype == np.uint8 and img.shape == (64, 64, 3)
     truth = (fi >= 0) & (stain[np.maximum(fi, 0)] > 0)
@@ -61,7 +61,7 @@ def test_light_stain_and_part_colour_rules(sphere):
 def test_no_stain_gives_empty_mask_and_zero_cp(sphere):
     clean = np.zeros(len(sphere.faces))
     rng = np.random.default_rng(1)
-    imgs = [render_stain_image(sphere, clean, [0, 0, -1.0], (32, 32), rng=rng) for _ in range(2)]
+    imgs = [render_stain_image(sphere, clean, [0, 0, -1.0], image_size=(32, 32), rng=rng) for _ in range(2)]
     fi = face_index_image(sphere, [0, 0, -1.0], (32, 32))
     before, after = stain_masks_kmeans(imgs, 0, region_mask=fi >= 0)
     assert not before.any() and not after.any()
@@ -92,13 +92,13 @@ def test_passes_ordering_and_flip():
     assert list(flipped[0, ::8]) == [3, 2, 1, 0]
     region = np.zeros(img.shape[:2], bool)
     region[:, :16] = True
-    assert (passes_from_image(img, 2, 0, region_mask=region)[:, 16:] == -1).all()
+    assert (passes_from_image(img, n_clusters=2, seed=0, region_mask=region)[:, 16:] == -1).all()
 
 
 def test_render_is_deterministic(sphere):
     stain = _cap_stain(sphere, 0.5)
-    a = render_stain_image(sphere, stain, [0, 0, -1.0], (24, 24), rng=np.random.default_rng(3))
-    b = render_stain_image(sphere, stain, [0, 0, -1.0], (24, 24), rng=np.random.default_rng(3))
+    a = render_stain_image(sphere, stain, [0, 0, -1.0], image_size=(24, 24), rng=np.random.default_rng(3))
+    b = render_stain_image(sphere, stain, [0, 0, -1.0], image_size=(24, 24), rng=np.random.default_rng(3))
     assert np.array_equal(a, b)
 
 

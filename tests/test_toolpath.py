@@ -185,7 +185,7 @@ def test_puma_ik_limits_the_path_to_what_the_arm_reaches():
     assert ik_axis(robot, pts, -nrm).success.mean() > 0.95  # spline points between waypoints too
     # The planner's interface places the part with the reach test's convention.
     mask = np.isin(np.arange(len(part.stain_faces)), ids)
-    t = execution_time_fn(part, robot, PARAMS)(mask[None], [[0.45, 0.75, 0.0]])
+    t = execution_time_fn(part, robot=robot, params=PARAMS)(mask[None], [[0.45, 0.75, 0.0]])
     assert t[0] == pytest.approx(arm.t_execution_s)
 
 

@@ -42,7 +42,7 @@ def test_friction_sticks_the_oscillation():
     # Below mu f_n the tool does not slide: amplitude and frequency no longer matter.
     f_n = 20.0
     small = [ _x(f_n=f_n, A_x=a, f_x=f) for a in (1.0, 4.0) for f in (2.0, 9.0)]
-    W = removal_from_vector(np.array(small), ScrubModel(tipping_ratio=1e3))
+    W = removal_from_vector(np.array(small), model=ScrubModel(tipping_ratio=1e3))
     assert np.allclose(W, W[0])
     assert removal_depth(dataclasses.replace(LissajousParams(), f_n=f_n, A_x=30.0)) > W[0]
 
@@ -63,9 +63,9 @@ def test_scrub_faces_noise_free_and_deterministic(stained_sphere):
     _, stain, hardness = stained_sphere
     p = LissajousParams()
     W = removal_depth(p)
-    np.testing.assert_allclose(scrub_faces(stain, p, hardness), np.clip(stain - W / hardness, 0, 1))
-    a = scrub_faces(stain, p, hardness, np.random.default_rng(5))
-    b = scrub_faces(stain, p, hardness, np.random.default_rng(5))
+    np.testing.assert_allclose(scrub_faces(stain, p, hardness=hardness), np.clip(stain - W / hardness, 0, 1))
+    a = scrub_faces(stain, p, hardness=hardness, rng=np.random.default_rng(5))
+    b = scrub_faces(stain, p, hardness=hardness, rng=np.random.default_rng(5))
     assert np.array_equal(a, b)
     assert np.all(a <= stain) and np.all(a[stain == 0] == 0)
 
@@ -77,13 +77,13 @@ def test_opacity_endpoints():
 
 def test_measure_cp_through_images(stained_sphere):
     mesh, stain, hardness = stained_sphere
-    assert measure_cp(mesh, np.zeros_like(stain), LissajousParams(), np.random.default_rng(0)) == 0.0
-    weak = measure_cp(mesh, stain, LissajousParams(v=1.0, f_n=1.0, A_x=0.0, A_y=0.0), None, hardness,
+    assert measure_cp(mesh, np.zeros_like(stain), LissajousParams(), rng=np.random.default_rng(0)) == 0.0
+    weak = measure_cp(mesh, stain, LissajousParams(v=1.0, f_n=1.0, A_x=0.0, A_y=0.0), rng=None, hardness=hardness,
                       image_size=(48, 48))
-    strong = measure_cp(mesh, stain, LissajousParams(v=0.05, f_n=20.0), None, hardness, image_size=(48, 48))
+    strong = measure_cp(mesh, stain, LissajousParams(v=0.05, f_n=20.0), rng=None, hardness=hardness, image_size=(48, 48))
     assert weak < 0.05 and strong > 0.8
-    r1 = measure_cp(mesh, stain, LissajousParams(), np.random.default_rng(9), hardness, image_size=(48, 48))
-    r2 = measure_cp(mesh, stain, LissajousParams(), np.random.default_rng(9), hardness, image_size=(48, 48))
+    r1 = measure_cp(mesh, stain, LissajousParams(), rng=np.random.default_rng(9), hardness=hardness, image_size=(48, 48))
+    r2 = measure_cp(mesh, stain, LissajousParams(), rng=np.random.default_rng(9), hardness=hardness, image_size=(48, 48))
     assert r1 == r2
 
 
@@ -103,7 +103,7 @@ def test_bad_inputs(stained_sphere):
     with pytest.raises(ValueError, match="face_stain"):
         scrub_faces(stain * 3, p)
     with pytest.raises(ValueError, match="hardness"):
-        scrub_faces(stain, p, -hardness)
+        scrub_faces(stain, p, hardness=-hardness)
     with pytest.raises(ValueError, match="X"):
         removal_from_vector(np.ones((2, 4)))
     with pytest.raises(ValueError, match="kappa"):

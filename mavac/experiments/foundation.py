@@ -13,7 +13,7 @@ from ..robots import kinematics
 from ..robots.models import load_robot
 
 
-def machine_summary(names=MACHINE_NAMES, spacing: float = 0.10, seed: int = 0) -> pd.DataFrame:
+def machine_summary(*, names=MACHINE_NAMES, spacing: float = 0.10, seed: int = 0) -> pd.DataFrame:
     """Size (m), exposed area (m^2) and dust-heap count at ``spacing`` for each machine.
 
     Columns: ``machine, size_x, size_y, size_z, exposed_area, heaps, faces, watertight``.
@@ -57,7 +57,7 @@ def reach_envelope(robot, n: int = 5000, seed: int = 0) -> np.ndarray:
     return kinematics.fk(robot, random_configurations(robot, n, seed))[:, :3, 3]
 
 
-def ik_accuracy(robot_names=("ur10_mobile", "puma560"), n: int = 1000, seed: int = 0) -> pd.DataFrame:
+def ik_accuracy(*, robot_names=("ur10_mobile", "puma560"), n: int = 1000, seed: int = 0) -> pd.DataFrame:
     """IK round trips on reachable targets (FK of random in-limit configurations).
 
     For each robot, full-pose ``ik`` and position + tool-axis ``ik_axis`` (closed form where

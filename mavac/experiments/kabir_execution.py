@@ -144,11 +144,11 @@ def plot_fig5(axes, sp: StainPerception):
 # ---------------------------------------------------------------- ICP
 
 
-def icp_tables(mesh, n_poses: int, noise_levels, init_perturbations, seed: int = 0,
+def icp_tables(mesh, n_poses: int, noise_levels, init_perturbations, *, seed: int = 0,
                params: ICPParams = ICPParams(), n_points: int = 2000) -> tuple[pd.DataFrame, pd.DataFrame]:
     """:func:`mavac.vision.icp.icp_error_study` and its per-condition summary (basin of convergence)."""
     study = icp_error_study(mesh, n_poses, noise_levels, init_perturbations, np.random.default_rng(seed),
-                            params, n_points=n_points)
+                            params=params, n_points=n_points)
     return study, icp_summary(study)
 
 

@@ -77,10 +77,10 @@ def run_trial(args) -> dict:
     rng = np.random.default_rng([seed, 7])
     if method == "gpr":
         params = gpr_params_for(part, max_experiments=budget, seed=seed)
-        result = learn_parameters(ex, params, rng)
+        result = learn_parameters(ex, params, rng=rng)
     elif method == "random":
         params = gpr_params_for(part, seed=seed)
-        result = random_search(ex, params, budget, rng)
+        result = random_search(ex, params, budget=budget, rng=rng)
     else:
         raise ValueError(f"method must be 'gpr' or 'random', got {method!r}")
     history = result.history.assign(part=part, method=method, seed=seed)
@@ -95,7 +95,7 @@ def run_trial(args) -> dict:
     return {"summary": row, "history": history}
 
 
-def gpr_vs_random(parts=PARTS, seeds=range(3), gpr_budget: int = 80, random_budget: int = 300,
+def gpr_vs_random(*, parts=PARTS, seeds=range(3), gpr_budget: int = 80, random_budget: int = 300,
                   n_jobs: int | None = None):
     """GPR and random search for every part and seed.
 

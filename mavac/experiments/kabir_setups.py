@@ -72,7 +72,7 @@ class Baseline:
         from ..robots.models import puma560
 
         part = load_part(self.name, seed=self.seed)
-        live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), space, reach_params)
+        live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), space, params=reach_params)
         return lookup_reach(self.setups, self.cover, fallback=live)
 
 
@@ -193,7 +193,7 @@ class _HierarchicalTask:
     def __call__(self, _=None) -> dict:
         b = self.baseline
         res = hierarchical_sampling(CountingReach(b.reach(self.space, self.reach_params)), self.space,
-                                    self.sampling, self.variant, target=b.coverable)
+                                    self.sampling, variant=self.variant, target=b.coverable)
         return dict(object=b.name, variant=self.variant, setups=min_cover_size(res.nondominated_cover),
                     level=res.level, n_rfc=res.n_rfc, optimal_setups=self.optimum,
                     covers_target=res.covers_target)
@@ -231,7 +231,7 @@ class _RandomTask:
         target = self.cover.any(axis=0)
         rows = []
         for seed in self.seeds:
-            res = random_sampling(CountingReach(reach), self.space, self.sampling, self.variant, seed=seed,
+            res = random_sampling(CountingReach(reach), self.space, self.sampling, variant=self.variant, seed=seed,
                                   target=target)
             size = min_cover_size(res.nondominated_cover)
             rows.append(dict(object=self.name, variant=self.variant, seed=seed, n_rfc=res.n_rfc,
@@ -246,7 +246,7 @@ def _run(task):
     return task()
 
 
-def random_runs(baselines: dict, space: SetupSpaceParams, sampling: SamplingParams, variants=VARIANTS,
+def random_runs(baselines: dict, space: SetupSpaceParams, sampling: SamplingParams, *, variants=VARIANTS,
                 repetitions: int | None = None, n_jobs: int | None = None, chunk: int = 25) -> pd.DataFrame:
     """Kabir IX-A2: ``repetitions`` random-sampling runs per object and variant (seeds 0..r-1).
 
@@ -293,7 +293,7 @@ def landscape(b: Baseline, space: SetupSpaceParams, alpha: float):
     return xs, ys, counts, a
 
 
-def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alpha: float, n_paths: int = 8,
+def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alpha: float, *, n_paths: int = 8,
              seed: int = 0, variant: str = "CA_XY") -> pd.DataFrame:
     """Gradient-descent paths from random x-y seeds at a fixed grid alpha (Kabir Fig. 8).
 
@@ -334,13 +334,13 @@ def planner_instance(b: Baseline, space: SetupSpaceParams, reach_params: ReachPa
                      sampling: SamplingParams) -> PlannerInstance:
     """Level-1 hierarchical grid without gradient descent, dominated setups removed."""
     res = hierarchical_sampling(CountingReach(b.reach(space, reach_params)), space,
-                                dataclasses.replace(sampling, max_levels=1), "none")
+                                dataclasses.replace(sampling, max_levels=1), variant="none")
     return PlannerInstance(b.name, res.nondominated_setups, res.nondominated_cover, b.area, b.passes)
 
 
 def _dfbnb_row(inst: PlannerInstance, params: SetupPlannerParams, cleaning_rate: float) -> dict:
     costs = setup_costs(inst.cover, inst.area, inst.passes, params.setup_time, cleaning_rate)
-    d = dfbnb_setup_cover(inst.cover, costs, inst.area, params)
+    d = dfbnb_setup_cover(inst.cover, costs, patch_area=inst.area, params=params)
     m = milp_setup_cover(inst.cover, costs)
     gap = (d.cost - m.cost) / m.cost if (m.optimal and math.isfinite(d.cost) and m.cost > 0) else \
         (0.0 if d.cost == m.cost else math.inf)
@@ -388,7 +388,7 @@ def table6(instances: dict, cleaning_rate: float, t_max: float, setup_times=(0.0
     return pd.DataFrame(rows)
 
 
-def fig9(ms=(7, 12, 13, 20), prob: float = 0.9, n_repeat_grid=None) -> pd.DataFrame:
+def fig9(*, ms=(7, 12, 13, 20), prob: float = 0.9, n_repeat_grid=None) -> pd.DataFrame:
     """Kabir Fig. 9 from eq. 5: (a-d) N_repeat reaching ``prob`` against q, (e-h) probability
     against N_repeat for every q. Columns ``panel, m, q, n_repeat, probability``."""
     rows = []

@@ -60,7 +60,7 @@ def _table1_trial(args) -> list[dict]:
     return rows
 
 
-def table1_trials(machines=("test_bench",), P_s_values=TABLE1_P_S, trials: int = 12,
+def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: int = 12,
                   params: InspectionParams | None = None, seed0: int = 0, n_jobs=None) -> pd.DataFrame:
     """Spot selection for each P_s over ``trials`` seeds per machine (MAVAC Table 1).
 
@@ -120,7 +120,7 @@ def _guard_sweep_trial(args) -> list[dict]:
     return rows
 
 
-def guard_sweep(machines=("test_bench",), P_g_values=FIG6_P_G, seeds=(0,), P_s: float = FIG6_P_S,
+def guard_sweep(*, machines=("test_bench",), P_g_values=FIG6_P_G, seeds=(0,), P_s: float = FIG6_P_S,
                 params: InspectionParams | None = None, n_jobs=None) -> pd.DataFrame:
     """Plans for every P_g with the spots fixed by ``P_s`` (MAVAC Fig. 6 and Fig. 7).
 
@@ -220,7 +220,7 @@ def _visibility_trial(args) -> dict:
                 agreement=res["agreement"], elements=len(ctx.points))
 
 
-def visibility_errors(machines=("test_bench", "sanding_machine", "milling_machine"), n_poses: int = 300,
+def visibility_errors(*, machines=("test_bench", "sanding_machine", "milling_machine"), n_poses: int = 300,
                       P_s: float = 0.02, params: InspectionParams | None = None, n_jobs=None) -> pd.DataFrame:
     """HPR's false-visible and false-hidden rates against ray casting over guard poses.
 
@@ -252,7 +252,7 @@ def _hpr_radius_trial(args) -> list[dict]:
     return rows
 
 
-def hpr_radius_sweep(machines=("test_bench", "sanding_machine", "milling_machine"), factors=HPR_RADIUS_FACTORS,
+def hpr_radius_sweep(*, machines=("test_bench", "sanding_machine", "milling_machine"), factors=HPR_RADIUS_FACTORS,
                      n_poses: int = 300, P_s: float = 0.02, params: InspectionParams | None = None,
                      n_jobs=None) -> pd.DataFrame:
     """Sensitivity of HPR to its spherical-flipping radius, against exact ray casting.

@@ -185,7 +185,7 @@ _NOTES = {
 }
 
 
-def machine_from_mesh(mesh: trimesh.Trimesh, name: str = "custom", notes: str = "") -> Machine:
+def machine_from_mesh(mesh: trimesh.Trimesh, *, name: str = "custom", notes: str = "") -> Machine:
     """Wrap your own machine mesh (metres, z up, see :func:`mavac.geometry.mesh.load_mesh`).
 
     The mesh is copied and lowered so its lowest point is on the floor (z = 0); x and y are
@@ -248,7 +248,7 @@ def exposed_area(machine: Machine) -> float:
     return float(np.asarray(mesh.area_faces)[~_floor_faces(mesh)].sum())
 
 
-def dust_heaps(machine: Machine, spacing: float = 0.10, seed: int = 0,
+def dust_heaps(machine: Machine, *, spacing: float = 0.10, seed: int = 0,
                min_normal_z: float = DUST_MIN_NORMAL_Z) -> np.ndarray:
     """Dust heap positions about ``spacing`` apart on the surfaces dust can rest on.
 

@@ -312,7 +312,7 @@ _GEOMETRY = {
 
 
 def stain_from_field(mesh: trimesh.Trimesh, n_stain: int, rng: np.random.Generator,
-                     pass_range: tuple[int, int] = (1, 3), n_blobs: tuple[int, int] = (2, 4)):
+                     *, pass_range: tuple[int, int] = (1, 3), n_blobs: tuple[int, int] = (2, 4)):
     """A stain of exactly ``n_stain`` faces: a smooth random field's top faces.
 
     Parameters
@@ -361,7 +361,7 @@ def _build(name: str, seed: int, n_stain: int | None, pass_range, notes: str) ->
     rng = np.random.default_rng(seed)
     if n_stain is None:
         n_stain = int(rng.integers(SYNTHETIC_STAIN_RANGE[0], SYNTHETIC_STAIN_RANGE[1] + 1))
-    stain, passes, intensity = stain_from_field(mesh, n_stain, rng, pass_range)
+    stain, passes, intensity = stain_from_field(mesh, n_stain, rng, pass_range=pass_range)
     return Part(name, mesh, stain, passes, intensity, notes)
 
 

@@ -195,7 +195,7 @@ def guard_visibility(world_T_cameras, points, normals, camera: CameraParams, par
 
 
 def select_guards(candidates: GuardCandidates, points, normals, camera: CameraParams, params: GuardParams,
-                  covered=None, vis_scene=None, cache: dict | None = None) -> GuardSelection:
+                  *, covered=None, vis_scene=None, cache: dict | None = None) -> GuardSelection:
     """The paper's greedy guard selection (eq. 3 score, threshold ``P_g`` x first maximum).
 
     Visibility (HPR or ray casting) is evaluated lazily: the FOV count bounds each candidate's

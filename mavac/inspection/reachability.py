@@ -221,7 +221,7 @@ def _build(robot, key: str, frame: str, params: ReachabilityMapParams, axis_colu
             "reachable": hit.reshape(*shape, len(dirs)), "key": key}
 
 
-def reachability_map(robot, params: ReachabilityMapParams | None = None, frame: str | None = None,
+def reachability_map(robot, params: ReachabilityMapParams | None = None, *, frame: str | None = None,
                      axis_column: int | None = None, cache: bool = True) -> ReachabilityMap:
     """Build (or load from the disk cache) the reachability map of ``robot``.
 

@@ -47,7 +47,7 @@ class GreedyResult:
     covered: np.ndarray
 
 
-def greedy_scores(new_counts, n_elements: int, weights=None, k1: float = 1.0, k2: float = 1.0):
+def greedy_scores(new_counts, n_elements: int, *, weights=None, k1: float = 1.0, k2: float = 1.0):
     """Score ``weight^k1 x (N / |S|)^k2`` (MAVAC eq. 3); candidates adding nothing score 0.
 
     Parameters
@@ -68,7 +68,7 @@ def greedy_scores(new_counts, n_elements: int, weights=None, k1: float = 1.0, k2
     return np.where(counts > 0, score, 0.0)
 
 
-def greedy_select(access, P: float, weights=None, k1: float = 1.0, k2: float = 1.0,
+def greedy_select(access, P: float, *, weights=None, k1: float = 1.0, k2: float = 1.0,
                   covered=None, evaluate=None, batch: int = 8) -> GreedyResult:
     """Iterative greedy selection with threshold ``P`` x first maximum score (MAVAC).
 
@@ -121,7 +121,7 @@ def greedy_select(access, P: float, weights=None, k1: float = 1.0, k2: float = 1
     def settle(counts):
         """Evaluate candidates until the best exact score beats every bound; return its index."""
         while True:
-            score = greedy_scores(counts, n, weights, k1, k2)
+            score = greedy_scores(counts, n, weights=weights, k1=k1, k2=k2)
             best_known = np.where(known, score, -1.0)
             top = float(best_known.max()) if m else -1.0
             pending = np.flatnonzero(~known & (score >= top) & (score > 0.0))

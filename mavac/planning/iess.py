@@ -117,7 +117,7 @@ def n_repeat_recommended(m: int, prob: float = 0.9) -> int:
 
 
 def initial_estimate_of_setup_size(
-    cover, n_repeat: int, seed: int | np.random.Generator = 0, deadline: float | None = None
+    cover, n_repeat: int, *, seed: int | np.random.Generator = 0, deadline: float | None = None
 ) -> int:
     """Algorithm 5: the smallest cover size found by ``n_repeat`` random draws.
 

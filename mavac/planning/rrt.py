@@ -69,7 +69,7 @@ def plan_rrt_connect(
     q_goal,
     lower,
     upper,
-    time_limit: float = 1.0,
+    *, time_limit: float = 1.0,
     seed: int = 0,
     resolution: float = 0.01,
     max_iterations: int = 5_000,

@@ -93,7 +93,7 @@ def setup_costs_from_times(exec_time, setup_time) -> np.ndarray:
     return te + ts
 
 
-def cleaning_rate(cover, setup_costs, patch_area=None, remaining=None) -> np.ndarray:
+def cleaning_rate(cover, setup_costs, *, patch_area=None, remaining=None) -> np.ndarray:
     """Cleaning rate ``R_j = area(P(s_j) & P_r) / (t_e_j + t_s_j)`` (Kabir, Sec. III), m^2/s.
 
     Parameters
@@ -241,7 +241,7 @@ class DFBnBResult:
     uncoverable: np.ndarray
 
 
-def dfbnb_setup_cover(cover, setup_costs, patch_area=None,
+def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
                       params: SetupPlannerParams | None = None) -> DFBnBResult:
     """FindSetupPlan: Kabir's depth-first branch and bound (Algorithms 1-2 or 3-5).
 
@@ -293,7 +293,7 @@ def dfbnb_setup_cover(cover, setup_costs, patch_area=None,
     if params.algorithm == 4:
         n_repeat = _n_repeat(params, m)
         iess = initial_estimate_of_setup_size(
-            comp.cover, n_repeat, params.seed,
+            comp.cover, n_repeat, seed=params.seed,
             deadline=None if params.t_max is None else deadline)
     depth_cap = m if iess is None else iess
 
@@ -547,7 +547,7 @@ class SetupCoverResult:
     certificate_seconds: float | None = None
 
 
-def solve_setup_cover(cover, setup_costs, patch_area=None,
+def solve_setup_cover(cover, setup_costs, *, patch_area=None,
                       params: SetupPlannerParams | None = None, method: str = "milp",
                       setup_time=None) -> SetupCoverResult:
     """Cheapest set of setups cleaning every coverable patch (Kabir, eq. 1).
@@ -593,7 +593,7 @@ def solve_setup_cover(cover, setup_costs, patch_area=None,
         uncoverable = milp_res.uncoverable
         status = milp_res.status
     else:
-        dfb = dfbnb_setup_cover(c, costs, area, params)
+        dfb = dfbnb_setup_cover(c, costs, patch_area=area, params=params)
         chosen, cost, seconds = dfb.setups, dfb.cost, dfb.seconds
         nodes, timed_out, iess = dfb.node_expansions, dfb.timed_out, dfb.iess
         uncoverable = dfb.uncoverable

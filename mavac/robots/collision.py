@@ -52,7 +52,7 @@ class CollisionChecker:
         Also test the moving links against the floor half-space z < 0 (world).
     """
 
-    def __init__(self, robot, obstacle: trimesh.Trimesh | None = None, world_T_base=np.eye(4),
+    def __init__(self, robot, obstacle: trimesh.Trimesh | None = None, *, world_T_base=np.eye(4),
                  margin: float = 0.0, floor: bool = False):
         if obstacle is not None and not isinstance(obstacle, trimesh.Trimesh):
             raise ValueError(f"obstacle must be a trimesh.Trimesh or None, got {type(obstacle).__name__}")

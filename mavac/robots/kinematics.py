@@ -423,7 +423,7 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
 
 
 def ik(
-    robot, base_T_target, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
+    robot, base_T_target, *, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
     max_iter: int = 50, n_restarts: int = 12, pos_tol: float = IK_POSITION_TOL, rot_tol: float = IK_ROTATION_TOL,
     damping: float = 1e-6, max_step: float = 1.0,
 ) -> IKResult:
@@ -463,7 +463,7 @@ def ik(
 
 
 def ik_axis(
-    robot, positions, axes, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
+    robot, positions, axes, *, frame: str | None = None, q0=None, rng: np.random.Generator | None = None,
     method: str = "auto", max_iter: int = 50, n_restarts: int = 12, pos_tol: float = IK_POSITION_TOL,
     rot_tol: float = IK_ROTATION_TOL, damping: float = 1e-6, max_step: float = 1.0, frame_axis: int = 2,
 ) -> IKResult:
@@ -694,7 +694,7 @@ def _manipulability(robot, q) -> np.ndarray:
     return np.sqrt(np.clip(np.linalg.det(J @ J.transpose(0, 2, 1)), 0.0, None))
 
 
-def estimate_manipulability_max(robot, n_samples: int = 20000, seed: int = 0) -> float:
+def estimate_manipulability_max(robot, *, n_samples: int = 20000, seed: int = 0) -> float:
     """Maximum of sqrt(det(J J^T)) over the joint box, by sampling plus a local random search.
 
     Sampling ``n_samples`` uniform configurations (seeded), then refining the 16 best by a

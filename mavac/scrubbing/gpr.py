@@ -247,7 +247,7 @@ def _fit_history(history: pd.DataFrame, params: GPRParams, seed: int):
 
 
 def learn_parameters(experiment, params: GPRParams = GPRParams(),
-                     rng: np.random.Generator | None = None, progress: bool = False) -> GPRResult:
+                     *, rng: np.random.Generator | None = None, progress: bool = False) -> GPRResult:
     """Learn operation parameters meeting ``C_p >= C_p^th`` (Kabir, Sec. VIII); see the module doc.
 
     Parameters
@@ -315,7 +315,7 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
     return GPRResult(history, chosen, chosen is not None, len(history), stop_reason)
 
 
-def random_search(experiment, params: GPRParams = GPRParams(), budget: int = 100,
+def random_search(experiment, params: GPRParams = GPRParams(), *, budget: int = 100,
                   rng: np.random.Generator | None = None) -> GPRResult:
     """Baseline: ``budget`` experiments at uniform random points of the box (uniform in the
     same normalised coordinates as the GPR design, i.e. log-uniform with ``log_inputs``).
@@ -333,7 +333,7 @@ def random_search(experiment, params: GPRParams = GPRParams(), budget: int = 100
     return GPRResult(history, chosen, chosen is not None, budget, "budget")
 
 
-def dense_optimum(experiment_mean, params: GPRParams = GPRParams(), points_per_axis=(33, 33, 13, 13, 13),
+def dense_optimum(experiment_mean, params: GPRParams = GPRParams(), *, points_per_axis=(33, 33, 13, 13, 13),
                   chunk: int = 200_000) -> DenseOptimum:
     """Feasible optimum of a noise-free model by dense grid search, refined once.
 
@@ -388,7 +388,7 @@ def dense_optimum(experiment_mean, params: GPRParams = GPRParams(), points_per_a
     return DenseOptimum(x, dict(zip(OPERATION_PARAMS, map(float, x))), J, cp, params.Cp_th, True)
 
 
-def experiments_to_reach(history: pd.DataFrame, optimum: DenseOptimum, tol: float = 0.05,
+def experiments_to_reach(history: pd.DataFrame, optimum: DenseOptimum, *, tol: float = 0.05,
                          cp_tol: float = 0.02) -> int | None:
     """Experiments run until the first point that is feasible and within ``tol`` of the optimum.
 

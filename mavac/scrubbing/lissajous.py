@@ -82,7 +82,7 @@ def _frames_from_normals(path: np.ndarray, normals: np.ndarray) -> np.ndarray:
     return np.stack([x, y, z], axis=2)
 
 
-def overlay_path(path, frames, params: LissajousParams = LissajousParams(), speed=None,
+def overlay_path(path, frames, params: LissajousParams = LissajousParams(), *, speed=None,
                  dt=None) -> Overlay:
     """Sample a nominal tool path in time and overlay the Lissajous oscillation.
 

@@ -185,7 +185,7 @@ def patches_for_pass(passes, k: int) -> np.ndarray:
     return np.asarray(passes) >= k
 
 
-def reachable_from_robot(robot, world_T_base=None, frame: str | None = None) -> Reachable:
+def reachable_from_robot(robot, *, world_T_base=None, frame: str | None = None) -> Reachable:
     """Reach test for tool paths: IK with the tool z axis along the given approach axes.
 
     Parameters
@@ -508,7 +508,7 @@ def _covered(part_world, faces, segments, tool_width) -> np.ndarray:
 
 
 def toolpath_for_setup(part, world_T_part, patch_ids, params: ToolpathParams = ToolpathParams(),
-                       reachable: Reachable | None = None, plane_normal=None) -> ToolPath:
+                       *, reachable: Reachable | None = None, plane_normal=None) -> ToolPath:
     """Multi-pass tool path of one setup (Kabir, Sec. VI).
 
     Parameters
@@ -561,7 +561,7 @@ def toolpath_for_setup(part, world_T_part, patch_ids, params: ToolpathParams = T
     return ToolPath(T, tuple(out), params)
 
 
-def execution_time_fn(part, robot=None, params: ToolpathParams = ToolpathParams(),
+def execution_time_fn(part, *, robot=None, params: ToolpathParams = ToolpathParams(),
                       space: SetupSpaceParams = SetupSpaceParams(),
                       world_T_part_from_setup: Callable | None = None):
     """Execution time t^e(tau_j) of candidate setups, for the setup planner's cost array.
@@ -601,7 +601,7 @@ def execution_time_fn(part, robot=None, params: ToolpathParams = ToolpathParams(
         if C.ndim != 2 or C.shape[0] != S.shape[0] or C.shape[1] != len(part.stain_faces):
             raise ValueError(f"cover must have shape ({S.shape[0]}, {len(part.stain_faces)}), got {C.shape}")
         return np.array([toolpath_for_setup(part, world_T_part_from_setup(s), np.flatnonzero(c), params,
-                                            reachable).t_execution_s if c.any() else 0.0
+                                            reachable=reachable).t_execution_s if c.any() else 0.0
                          for c, s in zip(C, S)])
 
     return exec_times

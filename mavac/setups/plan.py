@@ -97,7 +97,7 @@ class SetupPlan:
         return "\n".join(lines)
 
 
-def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> SetupPlan:
+def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> SetupPlan:
     """Plan the setups that clean a part's stain (Kabir et al. 2017).
 
     Parameters
@@ -142,14 +142,15 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
 
         robot = puma560(tool_length=params.reach.tool_length)
     mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
-    reach = CountingReach(PartReach(robot, reach_targets(vertices, normals), params.space, params.reach, mesh))
+    reach = CountingReach(PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach,
+                                    part_mesh=mesh))
 
     if params.sampling_method == "uniform":
         sampled = uniform_sampling(reach, params.space)
     elif params.sampling_method == "hierarchical":
-        sampled = hierarchical_sampling(reach, params.space, params.sampling, params.variant)
+        sampled = hierarchical_sampling(reach, params.space, params.sampling, variant=params.variant)
     else:
-        sampled = random_sampling(reach, params.space, params.sampling, params.variant, seed=params.seed)
+        sampled = random_sampling(reach, params.space, params.sampling, variant=params.variant, seed=params.seed)
     cover = sampled.nondominated_cover
     setups = sampled.nondominated_setups
     if len(setups) == 0:
@@ -161,7 +162,7 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
 
     t_s = params.planner.setup_time
     costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
-    res = solve_setup_cover(cover, costs, area, params.planner, params.method, setup_time=t_s)
+    res = solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method, setup_time=t_s)
     done = np.zeros(n, dtype=bool)
     patches, reachable = [], []
     for j in res.setups:

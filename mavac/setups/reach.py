@@ -178,7 +178,7 @@ def reach_bound(robot, frame: str | None = None) -> ReachBound:
 
 
 def patch_reach(robot, targets: ReachTargets, setups, space: SetupSpaceParams,
-                params: ReachParams | None = None, part_mesh=None) -> np.ndarray:
+                *, params: ReachParams | None = None, part_mesh=None) -> np.ndarray:
     """Which patches each setup reaches (Kabir Sec. IV), batched over setups.
 
     Parameters
@@ -280,7 +280,7 @@ class PartReach:
     """
 
     def __init__(self, robot, targets: ReachTargets, space: SetupSpaceParams,
-                 params: ReachParams | None = None, part_mesh=None):
+                 *, params: ReachParams | None = None, part_mesh=None):
         self.robot = robot
         self.targets = targets
         self.space = space
@@ -288,14 +288,14 @@ class PartReach:
         self.part_mesh = part_mesh
 
     def __call__(self, setups) -> np.ndarray:
-        return patch_reach(self.robot, self.targets, setups, self.space, self.params, self.part_mesh)
+        return patch_reach(self.robot, self.targets, setups, self.space, params=self.params, part_mesh=self.part_mesh)
 
     @property
     def n_patches(self) -> int:
         return self.targets.n_patches
 
 
-def reach_sweep(reach: Callable[[np.ndarray], np.ndarray], setups, n_jobs: int | None = None,
+def reach_sweep(reach: Callable[[np.ndarray], np.ndarray], setups, *, n_jobs: int | None = None,
                 chunk: int = 256, desc: str = "reach sweep") -> np.ndarray:
     """Evaluate a (picklable) reach function on many setups in parallel chunks.
 
@@ -356,7 +356,7 @@ def _reach_sweep_by_name(robot_name, positions, axes, patch_targets, setups, spa
     from ..robots.models import load_robot
 
     robot = load_robot(robot_name, tool_length=params.tool_length)
-    reach = PartReach(robot, ReachTargets(positions, axes, patch_targets), space, params)
+    reach = PartReach(robot, ReachTargets(positions, axes, patch_targets), space, params=params)
     return reach_sweep(reach, setups, n_jobs=n_jobs)
 
 

@@ -362,7 +362,7 @@ def _target_mask(target, n: int) -> np.ndarray:
     return t
 
 
-def uniform_sampling(reach: ReachFn, space: SetupSpaceParams, resolution=None, target=None) -> SamplingResult:
+def uniform_sampling(reach: ReachFn, space: SetupSpaceParams, *, resolution=None, target=None) -> SamplingResult:
     """Fine-resolution uniform sampling plus dominance elimination (Section IV-A1).
 
     Parameters
@@ -386,7 +386,7 @@ def uniform_sampling(reach: ReachFn, space: SetupSpaceParams, resolution=None, t
 
 
 def hierarchical_sampling(reach: ReachFn, space: SetupSpaceParams, sampling: SamplingParams,
-                          variant: str = "CA_XY", target=None) -> SamplingResult:
+                          *, variant: str = "CA_XY", target=None) -> SamplingResult:
     """Hierarchical uniform sampling with gradient descent (Section IV-A2).
 
     Level 1 is a uniform grid at the coarse resolution (``SamplingParams.coarse_res_*``); every
@@ -438,7 +438,7 @@ def hierarchical_sampling(reach: ReachFn, space: SetupSpaceParams, sampling: Sam
 
 
 def random_sampling(reach: ReachFn, space: SetupSpaceParams, sampling: SamplingParams,
-                    variant: str = "CA_XY", seed: int = 0, target=None) -> SamplingResult:
+                    *, variant: str = "CA_XY", seed: int = 0, target=None) -> SamplingResult:
     """Random sampling with gradient descent (Section IV-A3).
 
     Seeds are drawn one at a time, refined by ``variant`` and added to ψ when new, until ψ covers

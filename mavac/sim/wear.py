@@ -87,7 +87,7 @@ def _displacement(force, kappa, f, mass, zeta, max_dev):
     return x / np.sqrt(1 + (x / max_dev) ** 2)
 
 
-def removal_from_vector(X, model: ScrubModel = ScrubModel(),
+def removal_from_vector(X, *, model: ScrubModel = ScrubModel(),
                         base: LissajousParams = LissajousParams()) -> np.ndarray:
     """Noise-free Preston removal ``W`` (stain layers per pass) for operation vectors.
 
@@ -123,10 +123,10 @@ def removal_from_vector(X, model: ScrubModel = ScrubModel(),
 
 def removal_depth(params: LissajousParams, model: ScrubModel = ScrubModel()) -> float:
     """Noise-free Preston removal ``W`` (stain layers) for one set of operation parameters."""
-    return float(removal_from_vector(vector_from_lissajous(params)[None], model, params)[0])
+    return float(removal_from_vector(vector_from_lissajous(params)[None], model=model, base=params)[0])
 
 
-def scrub_faces(face_stain, params: LissajousParams, hardness=None,
+def scrub_faces(face_stain, params: LissajousParams, *, hardness=None,
                 rng: np.random.Generator | None = None, model: ScrubModel = ScrubModel()) -> np.ndarray:
     """SIMULATED scrubbing pass over every face: ``max(s - W eps / h, 0)``.
 
@@ -159,7 +159,7 @@ def scrub_faces(face_stain, params: LissajousParams, hardness=None,
 
 
 def measure_cp(part_mesh: trimesh.Trimesh, face_stain, params: LissajousParams,
-               rng: np.random.Generator | None = None, hardness=None, view: OrthoView | None = None,
+               *, rng: np.random.Generator | None = None, hardness=None, view: OrthoView | None = None,
                image_size=(96, 96), model: ScrubModel = ScrubModel(), noise_std: float = 0.02,
                face_index=None, kmeans_seed: int | None = None) -> float:
     """SIMULATED cleaning experiment measured like the paper: scrub, photograph, K-means, C_p.
@@ -199,7 +199,7 @@ def measure_cp(part_mesh: trimesh.Trimesh, face_stain, params: LissajousParams,
     if face_index is None:
         view = view_of_faces(part_mesh, stained) if view is None else view
         face_index = face_index_image(part_mesh, view, image_size)
-    after = scrub_faces(face_stain, params, hardness, rng, model)
+    after = scrub_faces(face_stain, params, hardness=hardness, rng=rng, model=model)
     if kmeans_seed is None:
         kmeans_seed = int(rng.integers(2**31 - 1)) if rng is not None else 0
     return _cp_from_images(part_mesh, face_stain, after, face_index, model,
@@ -223,7 +223,7 @@ def render_stain_states(mesh: trimesh.Trimesh, states, face_index, *, model: Scr
     -------
     list of (H, W, 3) uint8
     """
-    return [render_stain_image(mesh, stain_opacity(s, model), None, face_index.shape,
+    return [render_stain_image(mesh, stain_opacity(s, model), None, image_size=face_index.shape,
                                noise_std=noise_std, rng=rng, face_index=face_index)
             for s in states]
 
@@ -286,8 +286,8 @@ class ScrubExperiment:
 
     def __call__(self, x, rng: np.random.Generator | None = None) -> float:
         """Run one simulated experiment at ``x`` and measure C_p (noisy when ``rng`` is given)."""
-        return measure_cp(self.mesh, self.face_stain, self.params(x), rng, self.hardness,
-                          self.view, model=self.model, noise_std=self.noise_std,
+        return measure_cp(self.mesh, self.face_stain, self.params(x), rng=rng, hardness=self.hardness,
+                          view=self.view, model=self.model, noise_std=self.noise_std,
                           face_index=self.face_index)
 
     def _cp_of_removal(self, removal: float) -> float:
@@ -301,4 +301,4 @@ class ScrubExperiment:
             grid = np.linspace(0.0, 1.02 * w_all, self.table_points)
             self._table = (grid, np.array([self._cp_of_removal(w) for w in grid]))
         grid, cp = self._table
-        return np.interp(removal_from_vector(X, self.model, self.base), grid, cp)
+        return np.interp(removal_from_vector(X, model=self.model, base=self.base), grid, cp)

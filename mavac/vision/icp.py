@@ -48,7 +48,7 @@ def model_samples(mesh: trimesh.Trimesh, n_points: int, seed: int = 0) -> tuple[
 
 
 def register_part(cad_mesh: trimesh.Trimesh, cloud_points, init_T, params: ICPParams = ICPParams(),
-                  seed: int = 0) -> tuple[np.ndarray, float, float]:
+                  *, seed: int = 0) -> tuple[np.ndarray, float, float]:
     """Pose of the part from a point cloud: Open3D point-to-plane ICP (Kabir, Sec. VII).
 
     Parameters
@@ -195,7 +195,7 @@ def _pose_trial(args) -> list[dict]:
 
 
 def icp_error_study(mesh: trimesh.Trimesh, n_poses: int, noise_levels, init_perturbations,
-                    rng: np.random.Generator, params: ICPParams = ICPParams(), n_points: int = 2000,
+                    rng: np.random.Generator, *, params: ICPParams = ICPParams(), n_points: int = 2000,
                     xy_range: float = 0.2, max_tilt: float = np.radians(45.0),
                     n_jobs: int | None = None) -> pd.DataFrame:
     """ICP pose error against the true pose over random poses, noise levels and initial errors.

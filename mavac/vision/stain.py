@@ -57,7 +57,7 @@ class OrthoView:
         return d, right, down
 
 
-def view_of_faces(mesh: trimesh.Trimesh, faces=None, direction=None, margin: float = 0.05) -> OrthoView:
+def view_of_faces(mesh: trimesh.Trimesh, faces=None, *, direction=None, margin: float = 0.05) -> OrthoView:
     """Orthographic view framing ``faces`` (default all) seen along ``direction``.
 
     Parameters
@@ -131,7 +131,7 @@ def _rgb(name: str, colour) -> np.ndarray:
     return c
 
 
-def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, image_size=(96, 96),
+def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, *, image_size=(96, 96),
                        stain_rgb=(0.35, 0.22, 0.12), part_rgb=(0.92, 0.92, 0.88),
                        noise_std: float = 0.02, rng: np.random.Generator | None = None,
                        background_rgb=(0.0, 0.0, 0.0), face_index=None) -> np.ndarray:
@@ -217,7 +217,7 @@ def _fill_outside(image: np.ndarray, region: np.ndarray) -> np.ndarray:
     return out
 
 
-def stain_masks_kmeans(images, seed: int = 0, region_mask=None, light_stain: bool = False,
+def stain_masks_kmeans(images, seed: int = 0, *, region_mask=None, light_stain: bool = False,
                        part_rgb=None, min_contrast: float = 0.08, denoise: bool = True) -> list:
     """Binary stain masks of several images of the same part with ONE 2-cluster K-means.
 
@@ -282,13 +282,14 @@ def stain_masks_kmeans(images, seed: int = 0, region_mask=None, light_stain: boo
     return masks
 
 
-def stain_mask_kmeans(image, seed: int = 0, region_mask=None, light_stain: bool = False,
+def stain_mask_kmeans(image, seed: int = 0, *, region_mask=None, light_stain: bool = False,
                       part_rgb=None, min_contrast: float = 0.08, denoise: bool = True) -> np.ndarray:
     """Binary stain mask of one image by 2-cluster K-means on RGB (Kabir, Sec. VII, Fig. 4).
 
     See :func:`stain_masks_kmeans` for the parameters. Returns ``(H, W)`` bool (True = stain).
     """
-    return stain_masks_kmeans([image], seed, region_mask, light_stain, part_rgb, min_contrast, denoise)[0]
+    return stain_masks_kmeans([image], seed, region_mask=region_mask, light_stain=light_stain, part_rgb=part_rgb,
+                              min_contrast=min_contrast, denoise=denoise)[0]
 
 
 def cleaning_performance(mask_before, mask_after, region_mask=None) -> float:
@@ -317,7 +318,7 @@ def cleaning_performance(mask_before, mask_after, region_mask=None) -> float:
     return float((int(before[region].sum()) - int(after[region].sum())) / area)
 
 
-def passes_from_image(image, n_clusters: int = 4, seed: int = 0, light_stain: bool = False,
+def passes_from_image(image, *, n_clusters: int = 4, seed: int = 0, light_stain: bool = False,
                       region_mask=None) -> np.ndarray:
     """Cleaning passes per pixel by colour quantisation (Kabir, Sec. VII, Fig. 5).
 

@@ -256,7 +256,7 @@ def visible_from(
     normals,
     world_T_cameras,
     camera: CameraParams,
-    method: str = "hpr",
+    *, method: str = "hpr",
     mesh=None,
     hpr_input: str = "surface",
 ) -> np.ndarray:
@@ -299,7 +299,7 @@ def visible_from(
 
 
 def hpr_error_rates(
-    mesh, points, normals, world_T_cameras, camera: CameraParams, hpr_input: str = "surface"
+    mesh, points, normals, world_T_cameras, camera: CameraParams, *, hpr_input: str = "surface"
 ) -> dict:
     """HPR's misclassifications against exact ray casting, over many camera poses.
 
