@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import functools
 
+from joblib import Memory
+
+from .config import cache_dir
+
 
 @functools.lru_cache(maxsize=1)
 def memory():
     """The package's ``joblib.Memory`` under :func:`mavac.config.cache_dir`."""
-    from joblib import Memory
-
-    from .config import cache_dir
-
     return Memory(cache_dir(), verbose=0)
 

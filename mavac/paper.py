@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import functools
 
+import pandas as pd
+
 from .config import DATA_DIR
 
 PAPER_VALUES_CSV = DATA_DIR / "paper_values.csv"
@@ -19,8 +21,6 @@ PAPER_VALUES_CSV = DATA_DIR / "paper_values.csv"
 
 @functools.lru_cache(maxsize=1)
 def _load():
-    import pandas as pd
-
     return pd.read_csv(PAPER_VALUES_CSV, keep_default_na=False, dtype={"condition": str})
 
 
@@ -54,8 +54,6 @@ def paper_table(paper: str, ref: str, fractions: bool = True):
     fractions : bool
         Convert values with unit ``%`` to fractions (C and O are fractions of |S| in mavac).
     """
-    import pandas as pd
-
     df = paper_values(paper=paper, ref=ref)
     df = df[df["condition"].str.contains("=")].copy()
     if df.empty:

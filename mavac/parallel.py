@@ -10,6 +10,9 @@ from __future__ import annotations
 import os
 from typing import Callable, Iterable, Sequence
 
+from joblib import delayed, Parallel
+from tqdm.auto import tqdm
+
 
 def map_trials(fn: Callable, items: Iterable, *, n_jobs: int | None = None, backend: str | None = None,
                desc: str | None = None, progress: bool = True) -> list:
@@ -31,9 +34,6 @@ def map_trials(fn: Callable, items: Iterable, *, n_jobs: int | None = None, back
     progress : bool
         Show a tqdm progress bar.
     """
-    from joblib import Parallel, delayed
-    from tqdm.auto import tqdm
-
     items: Sequence = list(items)
     if n_jobs is None:
         n_jobs = int(os.environ.get("MAVAC_JOBS", "1"))

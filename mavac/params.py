@@ -2,8 +2,7 @@
 where it comes from. Change them with ``dataclasses.replace``; every dataclass validates
 itself in ``__post_init__`` and raises ``ValueError`` naming the field and its range.
 
-Sections (one per paper stage) are appended by the module owners below; keep each
-dataclass next to the others of its paper.
+One section per paper stage, each naming the modules that read it.
 """
 
 from __future__ import annotations
@@ -15,7 +14,7 @@ from .validate import check_int, check_nonnegative, check_positive, check_range,
 
 
 
-# ---- camera (owner: mavac.vision.camera) ----
+# ---- MAVAC camera (read by mavac.vision.camera and mavac.vision.visibility) ----
 
 
 @dataclass(frozen=True)
@@ -53,7 +52,7 @@ class CameraParams:
         check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
 
 
-# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (owner: mavac/scrubbing/lissajous.py, mavac/sim/wear.py, mavac/scrubbing/gpr.py) ----
+# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (read by mavac/scrubbing/lissajous.py, mavac/sim/wear.py, mavac/scrubbing/gpr.py) ----
 
 # Order of the operation-parameter vector x used by the scrub model and the GPR learner
 # (Kabir, Sec. VIII: tool speed, normal force, stiffness, frequency, amplitude).
@@ -244,7 +243,7 @@ class GPRParams:
         return tuple(float(getattr(self, f"{n}_bounds")[1]) for n in OPERATION_PARAMS)
 
 
-# ---- Kabir: setup space, reach test, candidate sampling (owner: mavac/setups/reach.py, mavac/setups/sampling.py) ----
+# ---- Kabir: setup space, reach test, candidate sampling (read by mavac/setups/reach.py, mavac/setups/sampling.py) ----
 
 
 @dataclass(frozen=True)
@@ -357,7 +356,7 @@ class SamplingParams:
         check_int("repetitions", self.repetitions, lo=1)
 
 
-# ---- Kabir: tool paths and ICP (owner: mavac/scrubbing/toolpath.py, mavac/vision/icp.py) ----
+# ---- Kabir: tool paths and ICP (read by mavac/scrubbing/toolpath.py, mavac/vision/icp.py) ----
 
 
 @dataclass(frozen=True)
@@ -420,7 +419,7 @@ class ICPParams:
         check_range("success_rotation_rad", self.success_rotation_rad, 0.0, math.pi, lo_open=True)
 
 
-# ---- Kabir: setup planner, DFBnB + IESS (owner: mavac/planning/setcover.py) ----
+# ---- Kabir: setup planner, DFBnB + IESS (read by mavac/planning/setcover.py) ----
 
 
 @dataclass(frozen=True)
@@ -483,7 +482,7 @@ class SetupPlannerParams:
         check_int("seed", self.seed, 0)
 
 
-# ---- MAVAC offline planning: reachability map, spots, guards, NoS (owner: mavac/mobile) ----
+# ---- MAVAC offline planning: reachability map, spots, guards, NoS (read by mavac/inspection) ----
 
 _VISIBILITY_METHODS = ("hpr", "raycast")
 
@@ -501,7 +500,8 @@ class ReachabilityMapParams:
     index of a voxel is the fraction of directions that are reachable (MAVAC, "Robot base
     placement", after Paus et al. and Porges et al.'s capability maps)."""
 
-    # Issue 3: "a voxel grid of configurable resolution, e.g. 5 cm".
+    # Ours: 5 cm voxels, the spacing of S (InspectionParams.surface_spacing), so neighbouring
+    # guard points fall in different cells (the paper gives no resolution).
     voxel_size: float = 0.05
     # Ours: axis directions on a Fibonacci sphere; 50 are ~29 deg apart.
     n_directions: int = 50
@@ -657,7 +657,7 @@ class InspectionParams:
                 raise ValueError(f"{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
 
 
-# ---- Kabir: plan_setups, the user-facing setup planner (owner: mavac/setups/plan.py) ----
+# ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/plan.py) ----
 
 
 

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 import pandas as pd
+import pinocchio as pin
 
 from ..geometry.machines import MACHINE_NAMES, dust_heaps, exposed_area, load_machine
 from ..geometry.parts import PART_NAMES, load_part
@@ -88,8 +89,6 @@ def ik_accuracy(*, robot_names=("ur10_mobile", "puma560"), n: int = 1000, seed: 
 def robot_summary(robot_names=("ur10_mobile", "puma560")) -> pd.DataFrame:
     """Joint count, tool frame, camera frame and the reach: the largest distance (m) from the
     shoulder (joint 2 origin) to the tool frame over random in-limit configurations."""
-    import pinocchio as pin
-
     rows = []
     for name in robot_names:
         robot = load_robot(name)

@@ -17,18 +17,22 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import Bounds, LinearConstraint, milp
 
 from ..geometry.parts import load_part
-from ..params import ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
+from ..io import atomic_path
 from ..parallel import map_trials
-from ..setups.dominance import nondominated
+from ..params import ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
 from ..planning.iess import n_repeat_for, p_find_min_cover
+from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_setup_cover,
+                                 setup_costs_from_times)
+from ..robots.models import puma560
+from ..setups.dominance import nondominated, pack_rows
 from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
                             reach_targets_from_part)
 from ..setups.sampling import (VARIANTS, gradient_descent, hierarchical_sampling, random_sampling,
                                uniform_setups, variant_plan)
-from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_setup_cover,
-                               setup_costs_from_times)
+from ..viz.plots import new_figure, plot_mesh
 
 #: Kabir Fig. 6 / Tables II-VI objects, in the paper's order.
 OBJECTS = ("sine", "schwefel", "concave_bowl", "hyperboloid")
@@ -69,8 +73,6 @@ class Baseline:
 
     def reach(self, space: SetupSpaceParams, reach_params: ReachParams):
         """Exact reach function: grid setups from the sweep, others by the reach test."""
-        from ..robots.models import puma560
-
         part = load_part(self.name, seed=self.seed)
         live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), space, params=reach_params)
         return lookup_reach(self.setups, self.cover, fallback=live)
@@ -94,8 +96,6 @@ def min_cover_size(cover) -> int:
     greedy size is optimal, otherwise the unit-cost MILP (HiGHS) decides. (Unit-cost covers
     have many optima, which makes HiGHS slow to prove one on ~10^3 setups.)
     """
-    from scipy.optimize import Bounds, LinearConstraint, milp
-
     cover = np.asarray(cover, dtype=bool)
     if cover.shape[0] == 0 or not cover.any():
         return 0
@@ -119,8 +119,6 @@ def min_cover_size(cover) -> int:
 
 def _pair_covers(cols: np.ndarray) -> bool:
     """Whether two rows of ``cols`` (m, k) bool together cover every column."""
-    from ..setups.dominance import pack_rows
-
     words = pack_rows(cols)
     full = pack_rows(np.ones((1, cols.shape[1]), dtype=bool))[0]
     missing = ~words & full
@@ -165,8 +163,6 @@ def coverage_summary(baselines: dict) -> pd.DataFrame:
 def save_cover_npz(b: Baseline, path, setup_time: float, cleaning_rate: float) -> Path:
     """Non-dominated cover matrix and eq. 1 costs for the planner benchmark (arrays ``cover``,
     ``costs``, ``setups``, ``area``)."""
-    from ..io import atomic_path
-
     nd = nondominated(b.cover)
     cover = b.cover[nd]
     costs = setup_costs(cover, b.area, b.passes, setup_time, cleaning_rate)
@@ -411,8 +407,6 @@ def fig9(*, ms=(7, 12, 13, 20), prob: float = 0.9, n_repeat_grid=None) -> pd.Dat
 
 def plot_objects(names=OBJECTS, seed: int = 0):
     """Kabir Fig. 6: the four objects, stain in red (darker = more passes)."""
-    from ..viz.plots import new_figure, plot_mesh
-
     fig, axes = new_figure(ncols=len(names), projection="3d", size=(4.5, 4.0))
     for ax, name in zip(np.atleast_1d(axes), names):
         part = load_part(name, seed=seed)
@@ -428,8 +422,6 @@ def plot_objects(names=OBJECTS, seed: int = 0):
 def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachParams):
     """One setup seen from above in the robot base frame: reachable patches green, others red,
     the robot's joint-1 axis at the origin and the setup square dashed."""
-    from ..viz.plots import new_figure
-
     part = load_part(b.name, seed=b.seed)
     setup = np.asarray(setup, dtype=float)
     j = int(np.argmin(np.linalg.norm(b.setups - setup, axis=1)))
@@ -457,8 +449,6 @@ def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachP
 
 def plot_fig7(runs: pd.DataFrame):
     """Kabir Fig. 7: n_rfc of the random-sampling runs per variant, one panel per object."""
-    from ..viz.plots import new_figure
-
     names = list(dict.fromkeys(runs.object))
     fig, axes = new_figure(ncols=len(names), size=(4.0, 3.5))
     for ax, name in zip(np.atleast_1d(axes), names):
@@ -475,8 +465,6 @@ def plot_fig7(runs: pd.DataFrame):
 def plot_fig8(b: Baseline, space: SetupSpaceParams, paths: pd.DataFrame, alpha: float):
     """Kabir Fig. 8: coverage landscape over x-y at fixed alpha with gradient-descent paths
     (black = seed, green = end of the conservative round, red = end of the absolute round)."""
-    from ..viz.plots import new_figure
-
     xs, ys, counts, a = landscape(b, space, alpha)
     n = paths.path.nunique()
     cols = min(4, n)
@@ -502,8 +490,6 @@ def plot_fig8(b: Baseline, space: SetupSpaceParams, paths: pd.DataFrame, alpha: 
 
 def plot_fig9(df: pd.DataFrame):
     """Kabir Fig. 9: N_repeat vs q (top) and probability vs N_repeat (bottom) per m."""
-    from ..viz.plots import new_figure
-
     ms = sorted(df.m.unique())
     fig, axes = new_figure(ncols=len(ms), nrows=2, size=(3.5, 3.0))
     axes = np.asarray(axes).reshape(2, len(ms))

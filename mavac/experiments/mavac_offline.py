@@ -8,10 +8,20 @@ from __future__ import annotations
 
 import dataclasses
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ..params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams)
+from ..geometry.machines import load_machine
+from ..inspection.coverage import coverage_overlap
+from ..inspection.plan import plan_from_context, plan_inspection, prepare_offline
+from ..inspection.spots import select_spots
+from ..paper import compare, paper_scalar, paper_table, paper_values
+from ..parallel import map_trials
+from ..params import CameraParams, GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams
+from ..vision.camera import fov_pyramid_lines
+from ..vision.visibility import hpr_error_rates, hpr_visible
+from ..viz.plots import plot_mesh, set_equal_3d
 
 #: MAVAC, Table 1: the P_s values of the paper.
 TABLE1_P_S = (0.01, 0.02, 0.05, 0.10, 0.15, 0.20, 0.30)
@@ -46,10 +56,6 @@ def _with(params: InspectionParams, seed=None, P_s=None, P_g=None) -> Inspection
 
 def _table1_trial(args) -> list[dict]:
     """One trial: sample S and jitter the candidates with ``seed``, then select for every P_s."""
-    from ..geometry.machines import load_machine
-    from ..inspection.plan import prepare_offline
-    from ..inspection.spots import select_spots
-
     machine, seed, P_s_values, params = args
     ctx = prepare_offline(load_machine(machine), params=_with(params, seed=seed))
     rows = []
@@ -70,8 +76,6 @@ def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: in
         One row per (machine, seed, P_s): ``spots``, ``C``, ``O`` (fractions of |S|),
         ``candidates`` (collision-free candidate spots), ``elements`` (|S|).
     """
-    from ..parallel import map_trials
-
     params = InspectionParams() if params is None else params
     items = [(m, seed0 + t, tuple(P_s_values), params) for m in machines for t in range(trials)]
     out = map_trials(_table1_trial, items, n_jobs=n_jobs, desc="Table 1 trials")
@@ -89,8 +93,6 @@ def table1_summary(trials_df: pd.DataFrame, with_machine: bool = False) -> pd.Da
 
 def table1_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
     """Paper's Table 1 next to ours (test bench): spots, C, O per P_s (C, O as fractions)."""
-    from ..paper import compare, paper_table
-
     ours = summary.rename(columns={"spots_mean": "spots", "C_mean": "C", "O_mean": "O"})
     return compare(ours, paper_table("mavac", "Table 1"), on=["P_s"], quantities=["spots", "C", "O"])
 
@@ -101,10 +103,6 @@ def table1_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
 
 def _guard_sweep_trial(args) -> list[dict]:
     """One machine and seed: prepare once, then plan for every P_g (spots fixed by P_s)."""
-    from ..geometry.machines import load_machine
-    from ..inspection.coverage import coverage_overlap
-    from ..inspection.plan import plan_from_context, prepare_offline
-
     machine, seed, P_g_values, P_s, params = args
     base = _with(params, seed=seed, P_s=P_s)
     ctx = prepare_offline(load_machine(machine), params=base)
@@ -130,8 +128,6 @@ def guard_sweep(*, machines=("test_bench",), P_g_values=FIG6_P_G, seeds=(0,), P_
         One row per (machine, seed, P_g): spots, guards, C_guards, O_guards, NoS clusters,
         attempts and guards, C_nos, O_nos (eq. 1-2 over the NoS guards alone), C_total, O_total.
     """
-    from ..parallel import map_trials
-
     params = InspectionParams() if params is None else params
     items = [(m, s, tuple(P_g_values), P_s, params) for m in machines for s in seeds]
     out = map_trials(_guard_sweep_trial, items, n_jobs=n_jobs, desc="P_g sweep")
@@ -169,8 +165,6 @@ def fig7_table(sweep: pd.DataFrame) -> pd.DataFrame:
 def fig6_vs_paper(fig6: pd.DataFrame, machine: str = "test_bench", plateau_from: float = 0.15) -> pd.DataFrame:
     """The paper's Fig. 6 plateau (C and O per guard, guard count beyond P_g = 15 %) next to ours
     (mean over our P_g >= ``plateau_from``)."""
-    from ..paper import paper_scalar
-
     ours = fig6[(fig6["machine"] == machine) & (fig6["P_g"] >= plateau_from - 1e-12)]
     rows = [
         ("C_per_guard", paper_scalar("mavac", "Fig. 6", "C_per_guard"), ours["C_per_guard"].mean()),
@@ -187,17 +181,14 @@ def fig6_vs_paper(fig6: pd.DataFrame, machine: str = "test_bench", plateau_from:
 
 
 #: Spherical-flipping radius factors of the HPR sensitivity study (ours): from just above the
-#: farthest point (Katz et al. need > 1) up to Open3D's tutorial value 100 (our default).
+#: farthest point (Katz et al. need > 1) up to Open3D's tutorial value 100. Our default, 10
+#: (:class:`mavac.params.CameraParams`), was chosen from this sweep.
 HPR_RADIUS_FACTORS = (1.5, 2.0, 3.0, 5.0, 10.0, 30.0, 100.0)
 
 
 def _guard_poses(machine: str, n_poses: int, P_s: float, params: InspectionParams):
     """Prepared context and at most ``n_poses`` feasible guard camera poses (m, 4, 4) of the
     spots selected with ``P_s``, subsampled with ``params.seed``."""
-    from ..geometry.machines import load_machine
-    from ..inspection.plan import prepare_offline
-    from ..inspection.spots import select_spots
-
     ctx = prepare_offline(load_machine(machine), params=_with(params, P_s=P_s))
     sel = select_spots(ctx.accessible, ctx.candidates, P_s)
     poses = np.concatenate([ctx.guard_candidates(int(r)).world_T_camera for r in sel.greedy.selected])
@@ -208,8 +199,6 @@ def _guard_poses(machine: str, n_poses: int, P_s: float, params: InspectionParam
 
 
 def _visibility_trial(args) -> dict:
-    from ..vision.visibility import hpr_error_rates
-
     machine, n_poses, P_s, params = args
     ctx, poses = _guard_poses(machine, n_poses, P_s, params)
     res = hpr_error_rates(ctx.machine.mesh, ctx.points, ctx.normals, poses, params.camera,
@@ -228,8 +217,6 @@ def visibility_errors(*, machines=("test_bench", "sanding_machine", "milling_mac
     ``P_s``, at most ``n_poses`` per machine. Columns: ``machine, poses, hpr_false_visible,
     hpr_false_hidden, hpr_seconds, raycast_seconds`` plus ``in_fov_pairs, agreement, elements``.
     """
-    from ..parallel import map_trials
-
     params = InspectionParams() if params is None else params
     items = [(m, n_poses, P_s, params) for m in machines]
     return pd.DataFrame(map_trials(_visibility_trial, items, n_jobs=n_jobs, desc="HPR vs ray casting"))
@@ -237,8 +224,6 @@ def visibility_errors(*, machines=("test_bench", "sanding_machine", "milling_mac
 
 def _hpr_radius_trial(args) -> list[dict]:
     """One machine: the same guard poses scored with every radius factor."""
-    from ..vision.visibility import hpr_error_rates
-
     machine, factors, n_poses, P_s, params = args
     ctx, poses = _guard_poses(machine, n_poses, P_s, params)
     rows = []
@@ -279,9 +264,6 @@ def hpr_radius_sweep(*, machines=("test_bench", "sanding_machine", "milling_mach
         hpr_false_visible, hpr_false_hidden, agreement`` (``1 - agreement`` is the fraction of
         in-FOV pairs HPR misclassifies).
     """
-    from ..parallel import map_trials
-    from ..params import CameraParams
-
     params = InspectionParams() if params is None else params
     factors = tuple(float(f) for f in factors)
     for f in factors:  # fail before the expensive preparation
@@ -293,8 +275,6 @@ def hpr_radius_sweep(*, machines=("test_bench", "sanding_machine", "milling_mach
 
 def plot_hpr_radius(sweep: pd.DataFrame):
     """HPR's false-visible and false-hidden rates against the radius factor, one line per machine."""
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharex=True)
     for m, d in sweep.groupby("machine", sort=False):
         axes[0].plot(d["radius_factor"], d["hpr_false_visible"], "o-", label=m)
@@ -316,9 +296,6 @@ def plot_hpr_radius(sweep: pd.DataFrame):
 
 def plan_machine(machine: str, params: InspectionParams | None = None, progress: bool = False):
     """:func:`mavac.inspection.plan.plan_inspection` on one of the package's machines."""
-    from ..geometry.machines import load_machine
-    from ..inspection.plan import plan_inspection
-
     return plan_inspection(load_machine(machine), params=params, progress=progress)
 
 
@@ -336,8 +313,6 @@ def plan_timings(plans) -> pd.DataFrame:
 
 def plot_table1(summary: pd.DataFrame, paper: pd.DataFrame | None = None):
     """Spots, C and O against P_s (ours: solid, paper: dashed)."""
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     axes[0].plot(summary["P_s"], summary["spots_mean"], "o-", label="ours")
     axes[1].plot(summary["P_s"], summary["C_mean"], "o-", color="tab:green", label="C ours")
@@ -358,8 +333,6 @@ def plot_table1(summary: pd.DataFrame, paper: pd.DataFrame | None = None):
 def _plot_per_guard(df: pd.DataFrame, c_col: str, o_col: str, count_col: str, what: str):
     """Coverage and overlap per guard (percent of |S|) against P_g, one panel per machine,
     with the guard count written above each point."""
-    import matplotlib.pyplot as plt
-
     machines = list(dict.fromkeys(df["machine"]))
     fig, axes = plt.subplots(1, len(machines), figsize=(4.5 * len(machines), 3.8), squeeze=False)
     for ax, m in zip(axes[0], machines):
@@ -386,10 +359,6 @@ def plot_fig7(fig7: pd.DataFrame):
 
 
 def _mesh_axes(mesh, elev=25, azim=-60):
-    import matplotlib.pyplot as plt
-
-    from ..viz.plots import plot_mesh, set_equal_3d
-
     fig = plt.figure(figsize=(7, 6))
     ax = fig.add_subplot(projection="3d")
     plot_mesh(ax, mesh, alpha=0.15)
@@ -401,9 +370,6 @@ def _mesh_axes(mesh, elev=25, azim=-60):
 def plot_guard_view(plan, pose: int | None = None):
     """MAVAC Fig. 3: one guard's FOV pyramid, the points HPR keeps from its viewpoint (light
     purple outside the pyramid, purple inside: what the guard sees), its target (red)."""
-    from ..vision.camera import fov_pyramid_lines
-    from ..vision.visibility import hpr_visible
-
     guards = np.flatnonzero(plan.pose_kind == "guard")
     if len(guards) == 0:
         raise ValueError("the plan has no guard to show")
@@ -447,10 +413,6 @@ def plot_nos_gateway(plan, cluster: int | None = None, ray_length: float = 0.6):
 def plot_spots(ctx, P_s_values=(0.02, 0.15)):
     """Candidate spots (grey) and the spots selected for each P_s (numbered in selection order),
     on the floor around the machine footprint."""
-    import matplotlib.pyplot as plt
-
-    from ..inspection.spots import select_spots
-
     fig, axes = plt.subplots(1, len(P_s_values), figsize=(5 * len(P_s_values), 4.2), squeeze=False)
     fp = np.vstack([ctx.machine.footprint, ctx.machine.footprint[:1]])
     for ax, P_s in zip(axes[0], P_s_values):
@@ -471,8 +433,6 @@ def plot_spots(ctx, P_s_values=(0.02, 0.15)):
 def recommended_vs_paper(summary: pd.DataFrame, params: InspectionParams) -> pd.DataFrame:
     """The paper's recommended settings next to ours, and what our plans give with them
     (the paper prints no coverage, guard or NoS counts for its final plans: Fig. 7 is a curve)."""
-    from ..paper import paper_values
-
     pv = paper_values(paper="mavac", ref="Results")
     rec = pv[pv["condition"] == "setting=recommended"].set_index("quantity")
     scale = {"%": 0.01}

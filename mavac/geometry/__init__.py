@@ -1,5 +1,6 @@
-"""Geometry: machine meshes (MAVAC), stained parts (Kabir), mesh loading and surface sampling.
+"""Geometry: machine meshes (MAVAC), stained parts (Kabir), mesh loading, surface sampling and
+rigid transforms.
 
-Import from the submodules (``mavac.geometry.machines``, ``.parts``, ``.mesh``, ``.surface``);
-this package file imports nothing so ``import mavac.geometry`` stays cheap.
+Import from the submodules (``mavac.geometry.machines``, ``.parts``, ``.mesh``, ``.surface``,
+``.transforms``); this package file imports nothing so ``import mavac.geometry`` stays cheap.
 """

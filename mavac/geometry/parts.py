@@ -30,7 +30,7 @@ from functools import lru_cache
 import numpy as np
 import trimesh
 
-from mavac.validate import check_int
+from ..validate import check_int
 
 #: every part ``load_part`` knows
 PART_NAMES = ("sine", "schwefel", "concave_bowl", "hyperboloid", "bowl", "hull")

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from mavac.validate import check_int, check_positive
+from ..validate import check_int, check_positive
 
 
 @dataclass(frozen=True)

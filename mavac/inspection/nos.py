@@ -17,6 +17,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+from sklearn.cluster import DBSCAN
 
 from ..geometry.transforms import compose, se2_matrices
 from ..params import CameraParams, InspectionParams, NoSParams
@@ -118,8 +122,6 @@ def cluster_unobserved(points, observed, eps: float, min_samples: int) -> np.nda
     (n,) int
         Cluster label per element; -1 for observed elements and DBSCAN noise.
     """
-    from sklearn.cluster import DBSCAN
-
     points = check_points("points", points)
     observed = np.asarray(observed, dtype=bool)
     if observed.shape != (len(points),):
@@ -190,10 +192,6 @@ def group_gateways(directions, escaping, neighbour_factor: float = 1.6) -> list[
     list of (k_i,) int arrays
         Ray indices per gateway, sorted by decreasing size (ties by smallest index).
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
     directions = np.asarray(directions, dtype=float)
     idx = np.flatnonzero(np.asarray(escaping, dtype=bool))
     if len(idx) == 0:

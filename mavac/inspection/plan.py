@@ -40,6 +40,7 @@ from ..robots.kinematics import maneuverability
 from ..robots.models import load_robot, ur10_mobile
 from ..tolerances import TOUR_GAIN_TOL
 from ..vision.visibility import VisibilityScene
+from ..viz import meshcat_scene as ms
 from . import guards as G
 from . import spots as SP
 from .coverage import cover_counts, coverage_overlap
@@ -284,8 +285,6 @@ class InspectionPlan:
         camera poses (guards blue, NoS guards orange) with lines to their targets, best gateways,
         and the robot at the first spot in its home configuration.
         """
-        from ..viz import meshcat_scene as ms  # meshcat: heavy, only for the export
-
         robot = load_robot(self.robot_name) if robot is None else robot
         world_T_spots = se2_matrices(self.spots) if len(self.spots) else np.zeros((0, 4, 4))
         with ms.scene() as vis:

@@ -26,8 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..cache import memory
 from ..geometry.transforms import points_in_frame, vectors_in_frame
 from ..params import ReachabilityMapParams
+from ..robots.kinematics import fk
+from ..tolerances import COUNT_SLACK, PARALLEL_TOL
 from ..validate import check_points
 from ..vision.camera import OPTICAL_AXIS
 from .nos import sphere_directions
@@ -157,8 +160,8 @@ def _vertical_joint1(robot):
     if m.njoints < 2 or m.parents[1] != 0 or m.joints[1].shortname() != "JointModelRZ":
         return np.zeros(3), False
     placement = m.jointPlacements[1]
-    vertical = np.allclose(placement.rotation[:, 2], [0.0, 0.0, 1.0], atol=1e-9)
-    full_turn = (robot.q_upper[0] - robot.q_lower[0]) >= 2.0 * math.pi - 1e-9
+    vertical = np.allclose(placement.rotation[:, 2], [0.0, 0.0, 1.0], atol=PARALLEL_TOL)
+    full_turn = (robot.q_upper[0] - robot.q_lower[0]) >= 2.0 * math.pi - COUNT_SLACK
     return np.asarray(placement.translation, dtype=float), bool(vertical and full_turn)
 
 
@@ -178,8 +181,6 @@ def robot_fingerprint(robot, frame: str) -> str:
 
 def _build(robot, key: str, frame: str, params: ReachabilityMapParams, axis_column: int) -> dict:
     """Sample FK, rotate about joint 1 when exact, bin into voxels x directions (cached)."""
-    from ..robots.kinematics import fk
-
     rng = np.random.default_rng(params.seed)
     lo = np.maximum(robot.q_lower, -math.pi)
     hi = np.minimum(robot.q_upper, math.pi)
@@ -243,8 +244,6 @@ def reachability_map(robot, params: ReachabilityMapParams | None = None, *, fram
     -------
     ReachabilityMap
     """
-    from ..cache import memory
-
     params = ReachabilityMapParams() if params is None else params
     if not isinstance(params, ReachabilityMapParams):
         raise ValueError(f"params must be a ReachabilityMapParams, got {type(params).__name__}")

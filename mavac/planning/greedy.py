@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..tolerances import GREEDY_TIE_RTOL
 from ..validate import check_unit
 
 
@@ -142,7 +143,7 @@ def greedy_select(access, P: float, *, weights=None, k1: float = 1.0, k2: float 
             break
         if not selected:
             threshold = P * float(score[best])
-        elif score[best] < threshold * (1.0 - 1e-12):  # a tie with the threshold is kept
+        elif score[best] < threshold * (1.0 - GREEDY_TIE_RTOL):  # a tie with the threshold is kept
             break
         new = exact[best] & ~done
         selected.append(best)

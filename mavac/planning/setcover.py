@@ -28,6 +28,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import Bounds, LinearConstraint, milp
+from scipy.sparse import csr_array
 
 from ..params import SetupPlannerParams
 from ..validate import check_cover
@@ -414,9 +416,6 @@ def milp_setup_cover(cover, setup_costs, time_limit: float | None = None) -> Mil
     MilpResult
         The relative MIP gap is set to 0, so "optimal" is a certificate.
     """
-    from scipy.optimize import Bounds, LinearConstraint, milp
-    from scipy.sparse import csr_array
-
     t0 = time.perf_counter()
     c = check_cover(cover)
     m, n = c.shape

@@ -50,9 +50,10 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
 from threadpoolctl import ThreadpoolController
+from tqdm.auto import tqdm
 
-from mavac.params import OPERATION_PARAMS, GPRParams
-from mavac.validate import check_int, check_nonnegative, check_points
+from ..params import OPERATION_PARAMS, GPRParams
+from ..validate import check_int, check_nonnegative, check_points
 
 __all__ = ["GPRParams", "GPRResult", "DenseOptimum", "OPERATION_PARAMS", "objective", "coarse_grid",
            "fit_surrogate", "feasibility_probability", "learn_parameters", "random_search",
@@ -264,8 +265,6 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
     -------
     GPRResult
     """
-    from tqdm.auto import tqdm
-
     rng = np.random.default_rng(params.seed) if rng is None else rng
     rows: list = []
     grid = coarse_grid(params)

@@ -8,7 +8,7 @@ while the cleaning force ``f_n`` pushes along tool z (into the surface). Under C
 impedance control with stiffness ``kappa`` the tool deviates from the nominal path by
 ``F / kappa`` (quasi-static; the dynamic response lives in :mod:`mavac.sim.wear`).
 
-Tool frame (CONTRACTS): z is the tool axis pointing into the surface (``z = -n`` for the
+Tool frame (README, Conventions): z is the tool axis pointing into the surface (``z = -n`` for the
 outward normal ``n``); we put x along the direction of travel, y = z x x.
 """
 
@@ -19,8 +19,8 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from mavac.params import LissajousParams
-from mavac.validate import check_points, check_positive
+from ..params import LissajousParams
+from ..validate import check_points, check_positive
 
 
 class Overlay(NamedTuple):

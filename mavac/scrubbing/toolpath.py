@@ -46,6 +46,9 @@ from scipy.spatial import cKDTree
 
 from ..geometry.transforms import check_transform, rotate_vectors, transform_points
 from ..params import SetupSpaceParams, ToolpathParams
+from ..robots.kinematics import ik_axis
+from ..setups.reach import base_T_part
+from ..tolerances import COUNT_SLACK
 from ..validate import check_int, check_points
 
 # Dense samples per waypoint interval when a spline is evaluated (length, coverage, output).
@@ -202,8 +205,6 @@ def reachable_from_robot(robot, *, world_T_base=None, frame: str | None = None) 
         ``reachable(positions (n,3) world m, axes (n,3) unit) -> (n,) bool`` with one batched
         :func:`mavac.robots.kinematics.ik_axis` call.
     """
-    from ..robots.kinematics import ik_axis
-
     base_T_world = np.linalg.inv(np.eye(4) if world_T_base is None else np.asarray(world_T_base, float))
 
     def reachable(positions: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -268,7 +269,7 @@ def slice_heights(projections: np.ndarray, spacing: float) -> np.ndarray:
     is within ``spacing / 2`` of a plane when the extent is a multiple of the spacing.
     """
     lo, hi = float(np.min(projections)), float(np.max(projections))
-    n = max(1, int(np.ceil((hi - lo) / spacing - 1e-9)))
+    n = max(1, int(np.ceil((hi - lo) / spacing - COUNT_SLACK)))
     return lo + 0.5 * ((hi - lo) - (n - 1) * spacing) + spacing * np.arange(n)
 
 
@@ -311,7 +312,7 @@ def resample_polyline(points: np.ndarray, spacing: float) -> np.ndarray:
     """Points at equal arc length (at most ``spacing`` apart) along a polyline, ends included."""
     seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(seg)])
-    n = max(2, int(np.ceil(s[-1] / spacing - 1e-9)) + 1)
+    n = max(2, int(np.ceil(s[-1] / spacing - COUNT_SLACK)) + 1)
     t = np.linspace(0.0, s[-1], n)
     return np.column_stack([np.interp(t, s, points[:, i]) for i in range(3)])
 
@@ -368,7 +369,7 @@ class _Surface:
         The chord is checked every ``tol`` (not every waypoint spacing) so that a stain-free
         notch wider than the tolerance is never crossed in contact.
         """
-        n = max(2, int(np.ceil(np.linalg.norm(b - a) / self.tol - 1e-9)) + 1)
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) / self.tol - COUNT_SLACK)) + 1)
         chord = a + np.linspace(0.0, 1.0, n)[1:-1, None] * (b - a)
         if len(chord) == 0:
             return chord
@@ -588,8 +589,6 @@ def execution_time_fn(part, *, robot=None, params: ToolpathParams = ToolpathPara
         :func:`mavac.planning.setcover.solve_setup_cover`.
     """
     if world_T_part_from_setup is None:
-        from ..setups.reach import base_T_part
-
         def world_T_part_from_setup(s):
             return base_T_part(np.asarray(s, dtype=float)[None], space)[0]
 

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..params import SetupPlanParams
+from ..planning.setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
+from ..robots.models import puma560
 from .reach import CountingReach, PartReach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
-from ..planning.setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
 
 
 @dataclass
@@ -138,8 +139,6 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
     if n == 0:
         return _empty_plan(name, time.perf_counter() - t0)
     if robot is None:
-        from ..robots.models import puma560
-
         robot = puma560(tool_length=params.reach.tool_length)
     mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
     reach = CountingReach(PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach,

@@ -40,9 +40,13 @@ from typing import Callable
 
 import numpy as np
 
+from ..cache import memory
 from ..geometry.transforms import se2_matrices
+from ..parallel import map_trials
 from ..params import ReachParams, SetupSpaceParams
+from ..robots.collision import CollisionChecker
 from ..robots.kinematics import ik_axis, puma_dh_constants
+from ..robots.models import load_robot
 from ..tolerances import SETUP_KEY_QUANTUM, TARGET_DECIMALS
 from ..validate import check_int, check_points
 
@@ -253,8 +257,6 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
 def _collision_free(robot, pos, ax, setup_index, base_T_parts, params, part_mesh) -> np.ndarray:
     """Arm-vs-part check at a stand-off of ``collision_standoff`` along the normal (the tool
     tip touches the surface at the target itself)."""
-    from ..robots.collision import CollisionChecker
-
     lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax)
     free = lifted.success.copy()
     checker = CollisionChecker(robot, part_mesh, margin=params.collision_margin)
@@ -309,8 +311,6 @@ def reach_sweep(reach: Callable[[np.ndarray], np.ndarray], setups, *, n_jobs: in
     chunk : int
         Setups per task.
     """
-    from ..parallel import map_trials
-
     setups = check_points("setups", setups, 3)
     chunk = check_int("chunk", chunk, lo=1)
     pieces = [setups[a:a + chunk] for a in range(0, len(setups), chunk)]
@@ -346,15 +346,11 @@ def cached_reach_sweep(robot_name: str, positions, axes, patch_targets, setups, 
 
 @functools.lru_cache(maxsize=1)
 def _sweep_cache():
-    from ..cache import memory
-
     return memory().cache(_reach_sweep_by_name, ignore=["n_jobs"])
 
 
 def _reach_sweep_by_name(robot_name, positions, axes, patch_targets, setups, space, params, n_jobs):
     # Cached body: editing it invalidates every stored sweep, so keep it minimal.
-    from ..robots.models import load_robot
-
     robot = load_robot(robot_name, tool_length=params.tool_length)
     reach = PartReach(robot, ReachTargets(positions, axes, patch_targets), space, params=params)
     return reach_sweep(reach, setups, n_jobs=n_jobs)

@@ -39,6 +39,7 @@ from typing import Callable
 import numpy as np
 
 from ..params import SamplingParams, SetupSpaceParams
+from ..tolerances import COUNT_SLACK
 from ..validate import check_int, check_positive
 from .dominance import nondominated
 from .reach import CountingReach, lookup_reach, setup_keys  # noqa: F401  (re-exported)
@@ -85,7 +86,7 @@ def _resolution(space: SetupSpaceParams, resolution) -> np.ndarray:
 
 def _axis_values(lo: float, hi: float, res: float) -> np.ndarray:
     # Both ends included when the range is a multiple of the step (21 x 21 x 37 in the paper).
-    count = int(math.floor((hi - lo) / res + 1e-9)) + 1
+    count = int(math.floor((hi - lo) / res + COUNT_SLACK)) + 1
     return lo + res * np.arange(count)
 
 
@@ -189,7 +190,7 @@ def neighbours(setup, axes, step, space: SetupSpaceParams) -> np.ndarray:
     setup = np.asarray(setup, dtype=float)
     lo = np.array([space.x_min, space.y_min, space.alpha_min])
     hi = np.array([space.x_max, space.y_max, space.alpha_max])
-    full_circle = space.alpha_max - space.alpha_min >= 2.0 * math.pi - 1e-9
+    full_circle = space.alpha_max - space.alpha_min >= 2.0 * math.pi - COUNT_SLACK
     out = []
     for k in axes:
         for sign in (-1.0, 1.0):
@@ -197,7 +198,7 @@ def neighbours(setup, axes, step, space: SetupSpaceParams) -> np.ndarray:
             cand[k] += sign * step[k]
             if k == 2 and full_circle:
                 cand[2] = _wrap_alpha(cand[2], space)
-            elif not (lo[k] - 1e-9 <= cand[k] <= hi[k] + 1e-9):
+            elif not (lo[k] - COUNT_SLACK <= cand[k] <= hi[k] + COUNT_SLACK):
                 continue
             out.append(cand)
     return np.array(out, dtype=float).reshape(-1, 3)

@@ -40,9 +40,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import trimesh
 
-from mavac.params import OPERATION_PARAMS, LissajousParams, ScrubModel
-from mavac.validate import check_int, check_points
-from mavac.vision.stain import (OrthoView, cleaning_performance, face_index_image,
+from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
+from ..validate import check_int, check_points
+from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
                                 render_stain_image, stain_masks_kmeans, view_of_faces)
 
 

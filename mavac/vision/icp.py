@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ..geometry.transforms import check_transform
+from ..parallel import map_trials
 from ..params import ICPParams
 from ..validate import check_int, check_nonnegative, check_points, check_positive
 from .visibility import raycast_visible
@@ -240,8 +241,6 @@ def icp_error_study(mesh: trimesh.Trimesh, n_poses: int, noise_levels, init_pert
         init_offset_m, cloud_points, translation_error_m, rotation_error_rad, adds_m, fitness,
         rmse_m, success`` (both errors within ``params.success_*``).
     """
-    from ..parallel import map_trials
-
     n_poses = check_int("n_poses", n_poses, lo=1)
     noise = [float(check_nonnegative("noise_levels", s)) for s in np.atleast_1d(noise_levels)]
     perturb = np.asarray(init_perturbations, dtype=float)

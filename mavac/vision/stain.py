@@ -23,7 +23,7 @@ import trimesh
 from sklearn.cluster import KMeans
 from threadpoolctl import ThreadpoolController
 
-from mavac.validate import check_int, check_nonnegative, check_points, check_range
+from ..validate import check_int, check_nonnegative, check_points, check_range
 
 
 @functools.lru_cache(maxsize=1)

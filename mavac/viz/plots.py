@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
 import numpy as np
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from ..config import figures_dir
 from ..io import savefig
@@ -10,8 +12,6 @@ from ..io import savefig
 
 def new_figure(ncols: int = 1, nrows: int = 1, size=(5.0, 4.0), projection: str | None = None):
     """A figure and its axes (matplotlib picks Agg itself on a machine without a display)."""
-    import matplotlib.pyplot as plt
-
     kw = {"subplot_kw": {"projection": projection}} if projection else {}
     fig, axes = plt.subplots(nrows, ncols, figsize=(size[0] * ncols, size[1] * nrows), squeeze=False, **kw)
     return fig, axes.ravel() if axes.size > 1 else axes[0, 0]
@@ -19,8 +19,6 @@ def new_figure(ncols: int = 1, nrows: int = 1, size=(5.0, 4.0), projection: str 
 
 def save(fig, name: str, close: bool = True):
     """Save ``fig`` as ``figures_dir()/name`` (PNG unless the name says otherwise)."""
-    import matplotlib.pyplot as plt
-
     path = savefig(fig, figures_dir() / name)
     if close:
         plt.close(fig)
@@ -30,8 +28,6 @@ def save(fig, name: str, close: bool = True):
 def plot_mesh(ax, mesh, color=(0.75, 0.75, 0.8), alpha: float = 0.6, face_colors=None, max_faces: int = 60000,
               seed: int = 0):
     """Draw a trimesh mesh on a 3-D axis (subsampled above ``max_faces`` faces, seeded)."""
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
     faces = np.arange(len(mesh.faces))
     if len(faces) > max_faces:
         faces = np.sort(np.random.default_rng(seed).choice(faces, max_faces, replace=False))
