@@ -152,3 +152,30 @@ def test_a_box_far_away_is_unreachable_and_a_near_one_is_not():
     cover_far = R.patch_reach(robot(), targets, np.zeros((1, 3)), SetupSpaceParams(**far), params=PARAMS)
     cover_near = R.patch_reach(robot(), targets, np.array([[0.2, 0.5, 0.0]]), SPACE, params=PARAMS)
     assert not cover_far.any() and cover_near.all()
+
+
+def test_every_vertex_slot_decides_inside_the_reach_bound():
+    # Large random triangles across the workspace: patches whose only unreachable vertex is the
+    # first, the second or the third, that vertex inside the exact reach sphere so that the IK,
+    # not the prefilter, has to reject it.
+    rng = np.random.default_rng(0)
+    n = 600
+    centres = rng.uniform([-0.6, -0.2, 0.0], [0.4, 1.2, 0.7], size=(n, 3))
+    v = centres[:, None, :] + rng.normal(scale=0.12, size=(n, 3, 3))
+    nrm = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    nrm *= np.sign(nrm[:, 2:3] + 1e-9)  # face up: the tool comes from above
+    targets = R.reach_targets(v, nrm)
+    setups = np.zeros((1, 3))
+    per_vertex = vertex_reach(targets, setups, "closed_form")[0][targets.patch_targets]
+    T = R.base_T_part(setups, SPACE)[0]
+    pos = targets.positions @ T[:3, :3].T + T[:3, 3]
+    ax = targets.axes @ T[:3, :3].T
+    bound = R.reach_bound(robot())
+    inside = (np.linalg.norm(pos - bound.tool_offset * ax - bound.centre, axis=1) <= bound.radius)
+    inside = inside[targets.patch_targets].all(axis=1)
+    for slot in range(3):
+        only_this = inside & ~per_vertex[:, slot] & (per_vertex.sum(axis=1) == 2)
+        assert only_this.sum() >= 5, f"the sample has too few patches lost at vertex slot {slot}"
+    cover = R.patch_reach(robot(), targets, setups, SPACE, params=PARAMS)
+    np.testing.assert_array_equal(cover[0], per_vertex.all(axis=1))

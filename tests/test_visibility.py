@@ -166,3 +166,25 @@ def test_bad_input_is_refused(walled_box):
         raycast_visible(walled_box, pts, np.zeros((3, 3)), VIEWPOINT)
     with pytest.raises(ValueError, match="mesh"):
         VisibilityScene(trimesh.Trimesh())
+
+
+def test_hpr_input_choice_on_a_concave_scene():
+    # A box with an open pocket, seen from above the pocket's rim: the two HPR inputs are
+    # different classifiers here, so each must be exactly the one its name says.
+    box = trimesh.creation.box(bounds=[[-0.6, -0.4, 0.0], [0.6, 0.4, 0.9]])
+    pocket = trimesh.creation.box(bounds=[[-0.3, -0.2, 0.5], [0.3, 0.2, 1.0]])
+    mesh = trimesh.boolean.difference([box, pocket], engine="manifold")
+    pts, _ = trimesh.sample.sample_surface_even(mesh, 4000, seed=0)
+    T = camera_pose_looking_at([0.25, 0.0, 0.5], [-0.3, 0.0, 1.0], 0.6)
+    cam = CameraParams()
+    fov = fov_masks(pts, T, cam)[0]
+    surface = visible_from(pts, None, T, cam, hpr_input="surface")[0]
+    cropped = visible_from(pts, None, T, cam, hpr_input="fov")[0]
+    # "surface": HPR of the whole sample from the camera, intersected with the FOV
+    np.testing.assert_array_equal(surface, fov & hpr_visible(pts, T[:3, 3], radius_factor=cam.hpr_radius_factor))
+    # "fov": HPR of the in-FOV points alone
+    idx = np.flatnonzero(fov)
+    expected = np.zeros(len(pts), dtype=bool)
+    expected[idx] = hpr_visible(pts[idx], T[:3, 3], radius_factor=cam.hpr_radius_factor)
+    np.testing.assert_array_equal(cropped, expected)
+    assert fov.sum() > 100 and np.any(surface != cropped)

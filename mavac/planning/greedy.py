@@ -69,6 +69,27 @@ def greedy_scores(new_counts, n_elements: int, *, weights=None, k1: float = 1.0,
     return np.where(counts > 0, score, 0.0)
 
 
+def _check_greedy_inputs(access, P, weights, k1, k2, covered):
+    """``access`` (m, n) bool, ``weights`` (m,) float or None, and a copy of ``covered`` (n,) bool."""
+    check_unit("P", P)
+    check_unit("k1", k1)
+    check_unit("k2", k2)
+    access = np.asarray(access, dtype=bool)
+    if access.ndim != 2:
+        raise ValueError(f"access must be a 2-D (candidates, elements) bool array, got shape {access.shape}")
+    m, n = access.shape
+    if weights is not None:
+        weights = np.asarray(weights, dtype=float)
+        if weights.shape != (m,):
+            raise ValueError(f"weights must have shape ({m},), got {weights.shape}")
+        if np.any(~np.isfinite(weights)) or np.any(weights < 0) or np.any(weights > 1):
+            raise ValueError("weights must be in [0, 1]")
+    done = np.zeros(n, dtype=bool) if covered is None else np.asarray(covered, dtype=bool).copy()
+    if done.shape != (n,):
+        raise ValueError(f"covered must have shape ({n},), got {done.shape}")
+    return access, weights, done
+
+
 def greedy_select(access, P: float, *, weights=None, k1: float = 1.0, k2: float = 1.0,
                   covered=None, evaluate=None, batch: int = 8) -> GreedyResult:
     """Iterative greedy selection with threshold ``P`` x first maximum score (MAVAC).
@@ -99,22 +120,8 @@ def greedy_select(access, P: float, *, weights=None, k1: float = 1.0, k2: float 
     GreedyResult
         Ties are broken by the lowest candidate index, so the result is deterministic.
     """
-    check_unit("P", P)
-    check_unit("k1", k1)
-    check_unit("k2", k2)
-    access = np.asarray(access, dtype=bool)
-    if access.ndim != 2:
-        raise ValueError(f"access must be a 2-D (candidates, elements) bool array, got shape {access.shape}")
+    access, weights, done = _check_greedy_inputs(access, P, weights, k1, k2, covered)
     m, n = access.shape
-    if weights is not None:
-        weights = np.asarray(weights, dtype=float)
-        if weights.shape != (m,):
-            raise ValueError(f"weights must have shape ({m},), got {weights.shape}")
-        if np.any(~np.isfinite(weights)) or np.any(weights < 0) or np.any(weights > 1):
-            raise ValueError("weights must be in [0, 1]")
-    done = np.zeros(n, dtype=bool) if covered is None else np.asarray(covered, dtype=bool).copy()
-    if done.shape != (n,):
-        raise ValueError(f"covered must have shape ({n},), got {done.shape}")
 
     exact = access.copy()
     known = np.full(m, evaluate is None)  # rows of ``exact`` that hold exact sets

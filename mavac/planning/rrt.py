@@ -51,6 +51,18 @@ class PlanResult:
     reason: str = "solved"
 
 
+def _check_box(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+    """The configuration box: finite 1-D ``lower < upper``."""
+    lo, hi = check_bounds("lower/upper", lower, upper)
+    if lo.ndim != 1 or lo.size == 0:
+        raise ValueError(f"lower and upper must be 1-D arrays with nq >= 1 entries, got shape {lo.shape}")
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise ValueError("lower and upper must be finite")
+    if np.any(lo == hi):
+        raise ValueError(f"lower/upper: empty interval at index {np.flatnonzero(lo == hi).tolist()}")
+    return lo, hi
+
+
 def _check_config(name: str, q, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     a = np.asarray(q, dtype=float)
     if a.shape != lower.shape:
@@ -104,13 +116,7 @@ def plan_rrt_connect(
     t0 = time.perf_counter()
     if not callable(is_valid):
         raise ValueError("is_valid must be callable: is_valid(q) -> bool")
-    lo, hi = check_bounds("lower/upper", lower, upper)
-    if lo.ndim != 1 or lo.size == 0:
-        raise ValueError(f"lower and upper must be 1-D arrays with nq >= 1 entries, got shape {lo.shape}")
-    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-        raise ValueError("lower and upper must be finite")
-    if np.any(lo == hi):
-        raise ValueError(f"lower/upper: empty interval at index {np.flatnonzero(lo == hi).tolist()}")
+    lo, hi = _check_box(lower, upper)
     qs = _check_config("q_start", q_start, lo, hi)
     qg = _check_config("q_goal", q_goal, lo, hi)
     check_range("time_limit", time_limit, 0.0, np.inf, lo_open=True)
@@ -123,7 +129,13 @@ def plan_rrt_connect(
         return PlanResult(None, False, time.perf_counter() - t0, "invalid start")
     if not is_valid(qg.copy()):
         return PlanResult(None, False, time.perf_counter() - t0, "invalid goal")
+    return _solve_with_ompl(is_valid, qs, qg, lo, hi, float(time_limit), seed, float(resolution), max_iterations,
+                            t0)
 
+
+def _solve_with_ompl(is_valid, qs, qg, lo, hi, time_limit, seed, resolution, max_iterations, t0) -> PlanResult:
+    """RRT-Connect on checked inputs: seeded OMPL setup, iteration-bounded solve, simplify,
+    interpolate (see the module docstring for the determinism)."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou

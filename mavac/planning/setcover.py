@@ -299,7 +299,22 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
             deadline=None if params.t_max is None else deadline)
     depth_cap = m if iess is None else iess
 
-    k = comp.cover.shape[1]
+    best, best_cost, nodes, timed_out = _search(comp, costs, params, deadline, depth_cap)
+    if best_cost < math.inf:
+        best_cost = math.fsum(float(costs[j]) for j in best)
+    return DFBnBResult(
+        setups=np.array(best, dtype=np.int64), cost=best_cost, node_expansions=nodes,
+        seconds=time.perf_counter() - t0, timed_out=timed_out, iess=iess, n_repeat=n_repeat,
+        uncoverable=comp.uncoverable)
+
+
+def _search(comp: _Compressed, costs: np.ndarray, params: SetupPlannerParams, deadline: float,
+            depth_cap: int) -> tuple[tuple, float, int, bool]:
+    """The depth-first search of :func:`dfbnb_setup_cover` (steps 1-5 of its Notes).
+
+    Returns ``(S*, T(S*) as summed along the branch, node expansions, timed out)``.
+    """
+    m, k = comp.cover.shape
     full = (1 << k) - 1
     cost_list = costs.tolist()
     masks = comp.masks
@@ -352,12 +367,7 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
         for j in reversed(children):
             stack.append((p_r & ~masks[j], s_u & ~(1 << j), s_curr + (j,), t_curr + cost_list[j]))
 
-    if best_cost < math.inf:
-        best_cost = math.fsum(cost_list[j] for j in best)
-    return DFBnBResult(
-        setups=np.array(best, dtype=np.int64), cost=best_cost, node_expansions=nodes,
-        seconds=time.perf_counter() - t0, timed_out=timed_out, iess=iess, n_repeat=n_repeat,
-        uncoverable=comp.uncoverable)
+    return best, best_cost, nodes, timed_out
 
 
 def _n_repeat(params: SetupPlannerParams, m: int) -> int:

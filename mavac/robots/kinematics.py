@@ -315,6 +315,57 @@ _STALL_ITERS = 12  # an attempt whose residual has not dropped by 1 % in this ma
 _WIDE_BELOW = 512  # fewer rows than this: the loop is overhead-bound, run restarts side by side
 
 
+def _check_solver_options(max_iter, n_restarts, pos_tol, rot_tol, damping, max_step) -> None:
+    check_int("max_iter", max_iter, 1)
+    check_int("n_restarts", n_restarts, 0)
+    check_positive("pos_tol", pos_tol)
+    check_positive("rot_tol", rot_tol)
+    check_positive("damping", damping)
+    check_positive("max_step", max_step)
+
+
+def _limited_step(dq: np.ndarray, max_step: float) -> np.ndarray:
+    """``dq`` (n, nq) scaled row by row so no joint moves more than ``max_step`` (in place)."""
+    big = np.max(np.abs(dq), axis=1)
+    dq *= np.minimum(1.0, max_step / np.maximum(big, 1e-300))[:, None]
+    return dq
+
+
+def _restarts(rt, ended, step, solved, left, wide):
+    """Targets of the fresh rows of the next iteration, and whether rows now run side by side.
+
+    Ended rows take a restart of their target while it has some left (in row order); when few
+    rows remain, waiting targets start their remaining restarts side by side (``left`` is
+    decremented in place).
+    """
+    e_rows = np.flatnonzero(ended)
+    e_sorted = e_rows[np.argsort(rt[e_rows], kind="stable")]
+    e_t = rt[e_sorted]
+    t_u, t_first, t_count = np.unique(e_t, return_index=True, return_counts=True)
+    rank = np.arange(e_t.size) - np.repeat(t_first, t_count)
+    reseed_rows = e_sorted[rank < left[e_t]]
+    left[t_u] -= np.minimum(t_count, left[t_u])
+    new_t = [rt[reseed_rows]]
+    n_next = int(step.sum()) + reseed_rows.size
+    waiting = np.flatnonzero(~solved & (left > 0))
+    if 0 < n_next < _WIDE_BELOW and waiting.size:
+        extra = np.minimum(left[waiting], (_WIDE_BELOW - n_next) // waiting.size)
+        new_t.append(np.repeat(waiting, extra))
+        left[waiting] -= extra
+        wide = True
+    return np.concatenate(new_t), wide
+
+
+def _residuals(C, p, p_tT, rot_tT, rows, mode: str, frame_axis: int):
+    """Position error (3, n), rotation vector (3, n) and angle (n,) of each row against its target."""
+    e_p = np.take(p_tT, rows, axis=1) - p
+    if mode == "axis":
+        e_r, ang = _axis_residual(C, np.take(rot_tT, rows, axis=1), frame_axis)
+    else:
+        e_r, ang = _pose_residual(C, np.take(rot_tT, rows, axis=2))
+    return e_p, e_r, ang
+
+
 def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts, pos_tol, rot_tol, damping, max_step,
                    frame_axis: int = 2):
     """Batched damped-least-squares Newton iterations with in-loop random restarts.
@@ -328,12 +379,7 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
     almost nothing in that overhead-bound regime and shortens the tail. A target is solved by
     its first converged row; per target the best attempt is kept.
     """
-    check_int("max_iter", max_iter, 1)
-    check_int("n_restarts", n_restarts, 0)
-    check_positive("pos_tol", pos_tol)
-    check_positive("rot_tol", rot_tol)
-    check_positive("damping", damping)
-    check_positive("max_step", max_step)
+    _check_solver_options(max_iter, n_restarts, pos_tol, rot_tol, damping, max_step)
     rng = np.random.default_rng(0) if rng is None else rng
     chain = _chain(robot, frame)
     lo, hi = robot.q_lower, robot.q_upper
@@ -357,11 +403,7 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
     wide = False  # True once a target may have several rows
     while rt.size:
         C, p, origins, axes = _forward(chain, rq, with_joints=True)
-        e_p = np.take(p_tT, rt, axis=1) - p
-        if mode == "axis":
-            e_r, ang = _axis_residual(C, np.take(rot_tT, rt, axis=1), frame_axis)
-        else:
-            e_r, ang = _pose_residual(C, np.take(rot_tT, rt, axis=2))
+        e_p, e_r, ang = _residuals(C, p, p_tT, rot_tT, rt, mode, frame_axis)
         pe = np.sqrt(np.einsum("in,in->n", e_p, e_p))
         metric = pe + 0.1 * ang
         converged = (pe < pos_tol) & (ang < rot_tol)
@@ -383,23 +425,7 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
         alive = ~solved[rt]  # drops the sibling rows of solved targets
         ended &= alive
         step = alive & ~ended & ~converged
-        # ended rows take a restart of their target while it has some left (in row order)
-        e_rows = np.flatnonzero(ended)
-        e_sorted = e_rows[np.argsort(rt[e_rows], kind="stable")]
-        e_t = rt[e_sorted]
-        t_u, t_first, t_count = np.unique(e_t, return_index=True, return_counts=True)
-        rank = np.arange(e_t.size) - np.repeat(t_first, t_count)
-        reseed_rows = e_sorted[rank < left[e_t]]
-        left[t_u] -= np.minimum(t_count, left[t_u])
-        new_t = [rt[reseed_rows]]
-        n_next = int(step.sum()) + reseed_rows.size
-        waiting = np.flatnonzero(~solved & (left > 0))
-        if 0 < n_next < _WIDE_BELOW and waiting.size:
-            extra = np.minimum(left[waiting], (_WIDE_BELOW - n_next) // waiting.size)
-            new_t.append(np.repeat(waiting, extra))
-            left[waiting] -= extra
-            wide = True
-        new_t = np.concatenate(new_t)
+        new_t, wide = _restarts(rt, ended, step, solved, left, wide)
         q_step = rq[step]
         if step.any():
             J = _jacobian_from(chain, robot.nq, p[:, step], origins[:, :, step], axes[:, :, step])
@@ -408,10 +434,7 @@ def _solve_batched(robot, frame, p_t, rot_t, mode, q0, rng, max_iter, n_restarts
                 z = C[frame_axis][:, step]
                 J[3:] -= z[:, None, :] * np.einsum("in,ikn->kn", z, J[3:])[None]
             e = np.concatenate([e_p[:, step], e_r[:, step]], axis=0)
-            dq = _dls_step(J, e, damping).T
-            big = np.max(np.abs(dq), axis=1)
-            dq *= np.minimum(1.0, max_step / np.maximum(big, 1e-300))[:, None]
-            q_step = np.clip(q_step + dq, lo, hi)
+            q_step = np.clip(q_step + _limited_step(_dls_step(J, e, damping).T, max_step), lo, hi)
         m_new = new_t.size
         rq = np.concatenate([q_step, rng.uniform(seed_lo, seed_hi, size=(m_new, robot.nq))])
         rt = np.concatenate([rt[step], new_t])
@@ -599,6 +622,12 @@ def _wrap_into(theta, lo: float, hi: float, principal: bool = False):
 _CHUNK = 16384  # rows per closed-form block: keeps the temporaries in cache
 
 
+def _concatenate_results(parts) -> IKResult:
+    """One IKResult from the results of consecutive blocks of targets."""
+    return IKResult(*(np.concatenate([getattr(r, f) for r in parts]) for f in
+                      ("q", "success", "position_error", "rotation_error")))
+
+
 def _puma_ik_axis(c, lo, hi, p, a, q0, pos_tol, rot_tol):
     """Closed-form axis IK, 8 branches (shoulder x elbow x wrist flip), vectorised by blocks.
 
@@ -607,13 +636,9 @@ def _puma_ik_axis(c, lo, hi, p, a, q0, pos_tol, rot_tol):
     """
     n = p.shape[0]
     if n > _CHUNK:
-        parts = [
-            _puma_ik_axis(c, lo, hi, p[i : i + _CHUNK], a[i : i + _CHUNK],
-                          None if q0 is None else q0[i : i + _CHUNK], pos_tol, rot_tol)
-            for i in range(0, n, _CHUNK)
-        ]
-        return IKResult(*(np.concatenate([getattr(r, f) for r in parts]) for f in
-                          ("q", "success", "position_error", "rotation_error")))
+        return _concatenate_results([_puma_ik_axis(c, lo, hi, p[i : i + _CHUNK], a[i : i + _CHUNK],
+                                                   None if q0 is None else q0[i : i + _CHUNK], pos_tol, rot_tol)
+                                     for i in range(0, n, _CHUNK)])
     w = p - c["reach"] * a
     wx, wy, wz = w[:, 0], w[:, 1], w[:, 2] - c["d1"]
     r2 = wx * wx + wy * wy
