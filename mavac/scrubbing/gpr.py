@@ -39,7 +39,6 @@ the history records it as ``C_p_mean`` for evaluation only -- the learner never 
 
 from __future__ import annotations
 
-import functools
 import warnings
 from dataclasses import dataclass
 
@@ -49,25 +48,15 @@ from scipy.stats import norm, qmc
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
-from threadpoolctl import ThreadpoolController
 from tqdm.auto import tqdm
 
+from ..parallel import single_thread
 from ..params import OPERATION_PARAMS, GPRParams
 from ..validate import check_int, check_nonnegative, check_points
 
 __all__ = ["GPRParams", "GPRResult", "DenseOptimum", "OPERATION_PARAMS", "objective", "coarse_grid",
            "fit_surrogate", "feasibility_probability", "learn_parameters", "random_search",
            "dense_optimum", "experiments_to_reach"]
-
-
-@functools.lru_cache(maxsize=1)
-def _threadpools() -> ThreadpoolController:
-    return ThreadpoolController()  # scanning the loaded libraries is slow: do it once
-
-
-def _single_thread():
-    """Context limiting BLAS/OpenMP to one thread (small problems; avoids contention)."""
-    return _threadpools().limit(limits=1)
 
 
 @dataclass
@@ -176,7 +165,7 @@ def fit_surrogate(U, y, seed: int = 0) -> GaussianProcessRegressor:
               + WhiteKernel(1e-3, (1e-6, 1e-1)))
     gp = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=1, random_state=seed)
     # Small matrices: multithreaded BLAS only adds contention (10-30x slower on a busy box).
-    with warnings.catch_warnings(), _single_thread():
+    with warnings.catch_warnings(), single_thread():
         warnings.simplefilter("ignore", ConvergenceWarning)
         gp.fit(U, y)
     return gp
@@ -185,7 +174,7 @@ def fit_surrogate(U, y, seed: int = 0) -> GaussianProcessRegressor:
 def latent_prediction(gp: GaussianProcessRegressor, U):
     """Mean and std of the noise-free C_p at ``U``: the fitted white noise is removed from
     scikit-learn's predictive std, so repeated experiments make the model certain."""
-    with _single_thread():
+    with single_thread():
         mu, sigma = gp.predict(U, return_std=True)
     # kernel_ = C * Matern + White (fit_surrogate); with normalize_y the white noise level is
     # in normalised units, scikit-learn keeps the scale in _y_train_std.

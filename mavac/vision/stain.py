@@ -14,26 +14,15 @@ Images are ``(H, W, 3)`` uint8 RGB.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 import trimesh
 from sklearn.cluster import KMeans
-from threadpoolctl import ThreadpoolController
 
+from ..parallel import single_thread
 from ..validate import check_int, check_nonnegative, check_points, check_range
-
-
-@functools.lru_cache(maxsize=1)
-def _threadpools() -> ThreadpoolController:
-    return ThreadpoolController()  # scanning the loaded libraries is slow: do it once
-
-
-def _single_thread():
-    """Context limiting BLAS/OpenMP to one thread (small problems; avoids contention)."""
-    return _threadpools().limit(limits=1)
 
 
 @dataclass(frozen=True)
@@ -262,7 +251,7 @@ def stain_masks_kmeans(images, seed: int = 0, *, region_mask=None, light_stain: 
     masks = [np.zeros(shape, dtype=bool) for _ in images]
     if len(pixels) < 2 or np.ptp(pixels, axis=0).max() == 0:
         return masks
-    with _single_thread():  # small problem: threads only add contention
+    with single_thread():  # small problem: threads only add contention
         km = KMeans(n_clusters=2, n_init=1, random_state=seed).fit(_fit_sample(pixels, seed))
         labels = km.predict(pixels)
     centres = km.cluster_centers_
@@ -346,7 +335,7 @@ def passes_from_image(image, *, n_clusters: int = 4, seed: int = 0, light_stain:
     pixels = image[region].reshape(-1, 3).astype(float) / 255.0
     if len(np.unique(pixels, axis=0)) < n_clusters:
         raise ValueError(f"n_clusters = {n_clusters} exceeds the number of distinct colours in the image")
-    with _single_thread():
+    with single_thread():
         km = KMeans(n_clusters=n_clusters, n_init=2, random_state=seed).fit(_fit_sample(pixels, seed))
         labels = km.predict(pixels)
     norms = np.linalg.norm(km.cluster_centers_, axis=1)
