@@ -1,6 +1,9 @@
 """Parameters as frozen dataclasses. Defaults are the papers' values; each field cites
 where it comes from. Change them with ``dataclasses.replace``; every dataclass validates
-itself in ``__post_init__`` and raises ``ValueError`` naming the field and its range.
+itself in ``__post_init__``: :func:`mavac.validate.check_fields` checks each field's type and
+finiteness from its annotation (``TypeError`` for a string, a boolean or ``None`` where a
+number is meant, ``ValueError`` for NaN or infinity), then the ranges are checked
+(``ValueError``), each error naming the field.
 
 One section per paper stage, each naming the modules that read it.
 """
@@ -10,8 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .validate import check_int, check_nonnegative, check_positive, check_range, check_unit
-
+from .validate import check_fields, check_int, check_nonnegative, check_positive, check_range, check_unit
 
 
 # ---- MAVAC camera (read by mavac.vision.camera and mavac.vision.visibility) ----
@@ -46,6 +48,7 @@ class CameraParams:
     hpr_radius_factor: float = 10.0
 
     def __post_init__(self):
+        check_fields(self)
         check_range("theta_a", self.theta_a, 0.0, math.pi / 2, lo_open=True, hi_open=True)
         check_range("theta_b", self.theta_b, 0.0, math.pi / 2, lo_open=True, hi_open=True)
         check_positive("L_d", self.L_d)
@@ -91,6 +94,7 @@ class LissajousParams:
     tool_speed_at_vmax: float = 0.1
 
     def __post_init__(self):
+        check_fields(self)
         check_positive("f_x", self.f_x)
         check_positive("kappa_x", self.kappa_x)
         check_positive("kappa_y", self.kappa_y)
@@ -156,6 +160,7 @@ class ScrubModel:
     optical_depth: float = 0.05
 
     def __post_init__(self):
+        check_fields(self)
         for name in ("preston", "contact_width", "contact_area", "foam_force", "friction", "mass",
                      "damping_ratio", "max_deviation", "tipping_ratio", "tipping_exponent"):
             check_positive(name, getattr(self, name))
@@ -209,6 +214,7 @@ class GPRParams:
     seed: int = 0
 
     def __post_init__(self):
+        check_fields(self)
         for name in OPERATION_PARAMS:
             bounds = getattr(self, f"{name}_bounds")
             if len(bounds) != 2:
@@ -226,7 +232,8 @@ class GPRParams:
         check_range("P_th", self.P_th, 0.0, 1.0, lo_open=True, hi_open=True)
         check_int("grid_points", self.grid_points, 2, 5)
         check_int("max_experiments", self.max_experiments, 1)
-        check_int("n_candidates", self.n_candidates, 16)
+        # Above 2^20 candidates one GP prediction per iteration needs gigabytes (ours).
+        check_int("n_candidates", self.n_candidates, 16, 2**20)
         check_unit("speed_weight", self.speed_weight)
         check_nonnegative("tol", self.tol)
         check_int("patience", self.patience, 1)
@@ -283,6 +290,7 @@ class SetupSpaceParams:
     table_z: float = 0.0
 
     def __post_init__(self):
+        check_fields(self)
         for name in ("x_min", "x_max", "y_min", "y_max", "alpha_min", "alpha_max",
                      "origin_x", "origin_y", "table_z"):
             check_range(name, getattr(self, name))
@@ -316,6 +324,7 @@ class ReachParams:
     batch_size: int = 1_000_000
 
     def __post_init__(self):
+        check_fields(self)
         check_nonnegative("tool_length", self.tool_length)
         check_nonnegative("collision_margin", self.collision_margin)
         check_nonnegative("collision_standoff", self.collision_standoff)
@@ -348,6 +357,7 @@ class SamplingParams:
     repetitions: int = 100
 
     def __post_init__(self):
+        check_fields(self)
         for name in ("coarse_res_x", "coarse_res_y", "coarse_res_alpha",
                      "gd_step_x", "gd_step_y", "gd_step_alpha"):
             check_positive(name, getattr(self, name))
@@ -382,6 +392,7 @@ class ToolpathParams:
     reposition_speed_m_s: float = 0.1
 
     def __post_init__(self):
+        check_fields(self)
         check_positive("tool_width_m", self.tool_width_m)
         check_positive("waypoint_spacing_m", self.waypoint_spacing_m)
         check_positive("tool_speed_m_s", self.tool_speed_m_s)
@@ -410,6 +421,7 @@ class ICPParams:
     success_rotation_rad: float = math.radians(2.0)
 
     def __post_init__(self):
+        check_fields(self)
         check_positive("max_correspondence_m", self.max_correspondence_m)
         check_int("max_iterations", self.max_iterations, lo=1)
         check_positive("relative_fitness", self.relative_fitness)
@@ -460,15 +472,12 @@ class SetupPlannerParams:
     seed: int = 0
 
     def __post_init__(self):
+        check_fields(self)
         check_int("algorithm", self.algorithm, 2, 4)
         if self.algorithm not in (2, 4):
             raise ValueError(f"algorithm must be 2 or 4, got {self.algorithm!r}")
         if self.bound not in ("lb", "b"):
             raise ValueError(f"bound must be 'lb' (eq. 2) or 'b' (eq. 7), got {self.bound!r}")
-        if not isinstance(self.guiding, bool):
-            raise ValueError(f"guiding must be a bool, got {self.guiding!r}")
-        if not isinstance(self.pruning, bool):
-            raise ValueError(f"pruning must be a bool, got {self.pruning!r}")
         if self.t_max is not None:
             check_positive("t_max", self.t_max)
         check_nonnegative("t_decay", self.t_decay)
@@ -513,6 +522,7 @@ class ReachabilityMapParams:
     seed: int = 0
 
     def __post_init__(self):
+        check_fields(self)
         check_positive("voxel_size", self.voxel_size)
         check_int("n_directions", self.n_directions, lo=4)
         check_int("n_samples", self.n_samples, lo=1)
@@ -546,6 +556,7 @@ class SpotParams:
     visibility: str = "hpr"
 
     def __post_init__(self):
+        check_fields(self)
         check_unit("P_s", self.P_s)
         _check_positive_tuple("ring_distances", self.ring_distances)
         check_positive("ring_spacing", self.ring_spacing)
@@ -582,6 +593,7 @@ class GuardParams:
     collision_margin: float = 0.01
 
     def __post_init__(self):
+        check_fields(self)
         check_unit("P_g", self.P_g)
         check_unit("k1", self.k1)
         check_unit("k2", self.k2)
@@ -622,6 +634,7 @@ class NoSParams:
     enabled: bool = True
 
     def __post_init__(self):
+        check_fields(self)
         check_positive("eps_factor", self.eps_factor)
         check_int("min_samples", self.min_samples, lo=1)
         check_int("n_rays", self.n_rays, lo=4)
@@ -649,12 +662,9 @@ class InspectionParams:
     nos: NoSParams = NoSParams()
 
     def __post_init__(self):
+        check_fields(self)
         check_positive("surface_spacing", self.surface_spacing)
         check_int("seed", self.seed, 0)
-        for name, cls in (("camera", CameraParams), ("reach", ReachabilityMapParams),
-                          ("spot", SpotParams), ("guard", GuardParams), ("nos", NoSParams)):
-            if not isinstance(getattr(self, name), cls):
-                raise ValueError(f"{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
 
 
 # ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/plan.py) ----
@@ -689,6 +699,7 @@ class SetupPlanParams:
     method: str = "both"
 
     def __post_init__(self):
+        check_fields(self)
         if self.sampling_method not in ("uniform", "hierarchical", "random"):
             raise ValueError(f"sampling_method must be 'uniform', 'hierarchical' or 'random', "
                              f"got {self.sampling_method!r}")

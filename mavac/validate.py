@@ -1,25 +1,58 @@
-"""Input checks shared by the whole package: every refusal is a ValueError naming the
-parameter and its valid range, raised before any dependency sees the bad value."""
+"""Input checks shared by the whole package, raised before any dependency sees the bad value.
+
+Every refusal names the parameter and what is valid: a ``TypeError`` (a
+:class:`ParameterTypeError`, also a ``ValueError``) when the value has the wrong type (a
+string, a boolean or ``None`` where a number is meant, floats where indices are meant), a
+``ValueError`` when the type is right but the value is not (NaN, infinity, out of range, wrong
+shape, ragged). Parameter dataclasses check every field's type and finiteness in
+one place, :func:`check_fields`, from their annotations.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
+import numbers
+import os
+import types
+import typing
+from pathlib import Path
 
 import numpy as np
 
 
+class ParameterTypeError(TypeError, ValueError):
+    """A parameter of the wrong type. A ``TypeError``, and a ``ValueError`` too, so code that
+    catches ``ValueError`` for every bad parameter (the package's rule before types were
+    checked apart) still catches it."""
+
+
+def _type_name(value) -> str:
+    return type(value).__name__
+
+
+def check_real(name: str, value) -> float:
+    """A real number (int, float or a numpy scalar of either, not bool, str or None); returns
+    it as a float, which may be NaN or infinite (:func:`check_range` refuses those)."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterTypeError(f"{name} must be a real number, got {value!r} ({_type_name(value)})")
+    return float(value)
+
+
 def check_range(name: str, value, lo=-math.inf, hi=math.inf, *, lo_open=False, hi_open=False):
-    """Raise ``ValueError`` unless ``lo <= value <= hi`` (open ends if asked); return value."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    """Raise unless ``value`` is a finite real number with ``lo <= value <= hi`` (open ends if
+    asked): ``TypeError`` for a non-number, ``ValueError`` otherwise. Returns ``value``."""
+    v = check_real(name, value)
     low_ok = v > lo if lo_open else v >= lo
     high_ok = v < hi if hi_open else v <= hi
-    if not (math.isfinite(v) or (v == hi == math.inf)) or not (low_ok and high_ok):
+    if not math.isfinite(v) or not (low_ok and high_ok):
         lb = "(" if lo_open else "["
         rb = ")" if hi_open else "]"
-        raise ValueError(f"{name} must be in {lb}{lo}, {hi}{rb}, got {value!r}")
+        finite = "" if math.isfinite(v) else " (and finite)"
+        raise ValueError(f"{name} must be in {lb}{lo}, {hi}{rb}{finite}, got {value!r}")
     return value
 
 
@@ -29,26 +62,41 @@ def check_unit(name: str, value):
 
 
 def check_positive(name: str, value):
-    """``value`` > 0."""
+    """``value`` > 0 (and finite)."""
     return check_range(name, value, 0.0, math.inf, lo_open=True)
 
 
 def check_nonnegative(name: str, value):
-    """``value`` >= 0."""
+    """``value`` >= 0 (and finite)."""
     return check_range(name, value, 0.0, math.inf)
 
 
 def check_int(name: str, value, lo: int = 0, hi: int | None = None) -> int:
-    """An integer in [lo, hi]."""
-    if isinstance(value, bool) or not float(value).is_integer():
+    """An integer in [lo, hi]; a float of integral value (``2.0``) is taken as that integer."""
+    v = check_real(name, value)
+    if not v.is_integer():
         raise ValueError(f"{name} must be an integer, got {value!r}")
     check_range(name, value, lo, math.inf if hi is None else hi)
-    return int(value)
+    return int(v)
+
+
+def check_array(name: str, value, dtype=None) -> np.ndarray:
+    """``np.asarray(value, dtype)`` with numpy's refusals (ragged nesting, text where numbers
+    are meant, ``None``) turned into errors naming the parameter."""
+    if value is None:
+        raise ParameterTypeError(f"{name} must be an array, got None")
+    try:
+        a = np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a rectangular array of numbers ({exc})") from None
+    if a.dtype.kind in "OUSV" and dtype is None:
+        raise ParameterTypeError(f"{name} must be an array of numbers, got dtype {a.dtype}")
+    return a
 
 
 def check_points(name: str, array, dim: int = 3) -> np.ndarray:
     """A finite ``(n, dim)`` float array (a single ``(dim,)`` row is promoted)."""
-    a = np.asarray(array, dtype=float)
+    a = check_array(name, array, float)
     if a.ndim == 1 and a.shape[0] == dim:
         a = a[None, :]
     if a.ndim != 2 or a.shape[1] != dim:
@@ -58,26 +106,150 @@ def check_points(name: str, array, dim: int = 3) -> np.ndarray:
     return a
 
 
+def check_bool_array(name: str, value) -> np.ndarray:
+    """A boolean array; 0/1 numbers are accepted and converted, anything else (NaN, 0.5, 2) is
+    refused rather than cast to True."""
+    a = check_array(name, value)
+    if a.dtype != bool:
+        if not np.all((a == 0) | (a == 1)):
+            raise ValueError(f"{name} must be boolean (or 0/1)")
+        a = a.astype(bool)
+    return a
+
+
 def check_cover(cover) -> np.ndarray:
     """A 2-D ``(m, n)`` boolean cover matrix (``cover[j, i]``: setup j reaches patch i);
     0/1 integers are accepted and converted."""
-    c = np.asarray(cover)
+    c = check_bool_array("cover", cover)
     if c.ndim != 2:
         raise ValueError(f"cover must be a 2-D (m, n) boolean array, got shape {c.shape}")
-    if c.dtype != bool:
-        if not np.all((c == 0) | (c == 1)):
-            raise ValueError("cover must be boolean (or 0/1)")
-        c = c.astype(bool)
     return c
+
+
+def check_indices(name: str, ids, n: int) -> np.ndarray:
+    """Indices into ``n`` items: ``(k,)`` integers in ``[0, n)`` or an ``(n,)`` boolean mask.
+
+    Floats are refused, not truncated (``0.7`` is no index). Returns ``(k,)`` int64.
+    """
+    a = check_array(name, ids)
+    if a.dtype == bool:
+        if a.shape != (n,):
+            raise ValueError(f"{name} as a boolean mask must have shape ({n},), got {a.shape}")
+        return np.flatnonzero(a)
+    if a.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if a.ndim == 0:
+        a = a.reshape(1)
+    if a.dtype.kind not in "iu":
+        raise ParameterTypeError(f"{name} must be integer indices (or a boolean mask), got dtype {a.dtype}")
+    if a.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D array of indices, got shape {a.shape}")
+    if a.min() < 0 or a.max() >= n:
+        raise ValueError(f"{name} must index [0, {n - 1}], got values in [{a.min()}, {a.max()}]")
+    return a.astype(np.int64)
+
+
+def check_instance(name: str, value, cls):
+    """``value`` is a ``cls`` (e.g. a parameter dataclass handed to a function)."""
+    if not isinstance(value, cls):
+        raise ParameterTypeError(f"{name} must be a {cls.__name__}, got {value!r} ({_type_name(value)})")
+    return value
+
+
+def check_callable(name: str, value, signature: str):
+    """``value`` is callable; ``signature`` says what it is called with, for the message."""
+    if not callable(value):
+        raise ParameterTypeError(f"{name} must be a callable {signature}, got {_type_name(value)}")
+    return value
+
+
+def check_path(name: str, path) -> Path:
+    """A file path (``str`` or ``os.PathLike``), returned as a ``Path``."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise ParameterTypeError(f"{name} must be a file path (str or os.PathLike), got {path!r} "
+                                 f"({_type_name(path)})")
+    return Path(path)
 
 
 def check_bounds(name: str, lower, upper):
     """Elementwise ``lower <= upper`` for parameter boxes; returns float arrays."""
-    lo = np.asarray(lower, dtype=float)
-    hi = np.asarray(upper, dtype=float)
+    lo = check_array(name, lower, float)
+    hi = check_array(name, upper, float)
     if lo.shape != hi.shape:
         raise ValueError(f"{name}: lower and upper bounds have different shapes {lo.shape} vs {hi.shape}")
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise ValueError(f"{name}: bounds must be finite")
     if np.any(lo > hi):
         bad = np.flatnonzero(np.atleast_1d(lo > hi)).tolist()
         raise ValueError(f"{name}: lower bound > upper bound at index {bad}")
     return lo, hi
+
+
+def check_size(name: str, value, count: float, limit: float, what: str) -> None:
+    """Refuse a parameter value that sets the size of the work beyond ``limit``: a tiny step or
+    a huge count would otherwise run for hours or exhaust memory instead of failing. ``count``
+    is the number of ``what`` (e.g. "waypoints") that ``name = value`` would make; each caller
+    states why its ``limit`` is far above any real use."""
+    if not count <= limit:
+        raise ValueError(f"{name} = {value!r} would make about {count:.3g} {what}, more than the "
+                         f"{limit:.3g} this step allows; change {name}")
+
+
+# ---- parameter dataclasses: one type and finiteness check for every field ----
+
+
+@functools.lru_cache(maxsize=None)
+def _field_types(cls) -> tuple:
+    hints = typing.get_type_hints(cls)
+    return tuple((f.name, hints[f.name]) for f in dataclasses.fields(cls))
+
+
+def _check_field(owner: str, name: str, value, kind):
+    """Type (``TypeError``) and finiteness (``ValueError``) of one field value; returns the
+    value to store (a list given for a tuple field becomes a tuple)."""
+    label = f"{name} ({owner})"
+    options = typing.get_args(kind) if isinstance(kind, types.UnionType) else (kind,)
+    if value is None and type(None) in options:
+        return None
+    kind = next(k for k in options if k is not type(None))
+    if kind is bool:
+        if not isinstance(value, (bool, np.bool_)):
+            raise ParameterTypeError(f"{label} must be True or False, got {value!r} ({_type_name(value)})")
+        return bool(value)
+    if kind is int:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+            raise ParameterTypeError(f"{label} must be an integer, got {value!r} ({_type_name(value)})")
+        return value
+    if kind is float:
+        if not math.isfinite(check_real(label, value)):
+            raise ValueError(f"{label} must be finite, got {value!r}")
+        return value
+    if kind is str:
+        if not isinstance(value, str):
+            raise ParameterTypeError(f"{label} must be a string, got {value!r} ({_type_name(value)})")
+        return value
+    if kind is tuple:
+        if not isinstance(value, (tuple, list)):
+            raise ParameterTypeError(f"{label} must be a tuple of numbers, got {value!r} ({_type_name(value)})")
+        for v in value:
+            if not math.isfinite(check_real(label, v)):
+                raise ValueError(f"{label} must hold finite numbers, got {tuple(value)!r}")
+        return tuple(value)
+    return check_instance(label, value, kind)  # a nested parameter dataclass
+
+
+def check_fields(params) -> None:
+    """Check the type and finiteness of every field of a parameter dataclass from its
+    annotation (``float``, ``int``, ``bool``, ``str``, ``tuple`` of numbers, ``X | None``, a
+    nested dataclass). Each dataclass of :mod:`mavac.params` calls it first in
+    ``__post_init__``, then checks its ranges.
+
+    Raises ``TypeError`` for a wrong type (a string or a boolean where a number is meant, a
+    float where an integer is meant) and ``ValueError`` for NaN or infinity, naming the field.
+    """
+    owner = type(params).__name__
+    for name, kind in _field_types(type(params)):
+        value = getattr(params, name)
+        checked = _check_field(owner, name, value, kind)
+        if checked is not value:
+            object.__setattr__(params, name, checked)  # frozen: store the normalised value

@@ -19,8 +19,12 @@ def test_open_intervals_and_types():
         check_positive("L_d", 0.0)
     with pytest.raises(ValueError, match="theta_a"):
         check_range("theta_a", math.pi / 2, 0, math.pi / 2, lo_open=True, hi_open=True)
-    with pytest.raises(ValueError, match="must be a number"):
+    with pytest.raises(TypeError, match="x must be a real number, got 'abc'"):
         check_range("x", "abc")
+    with pytest.raises(TypeError, match="x must be a real number, got True"):
+        check_range("x", True)
+    with pytest.raises(ValueError, match=r"L_d must be in \(0.0, inf\] \(and finite\), got inf"):
+        check_positive("L_d", float("inf"))
     with pytest.raises(ValueError, match="N_repeat must be an integer"):
         check_int("N_repeat", 2.5)
     with pytest.raises(ValueError, match="N_repeat"):
