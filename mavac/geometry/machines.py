@@ -21,10 +21,11 @@ from functools import lru_cache
 
 import numpy as np
 import trimesh
-from scipy.spatial import ConvexHull
+from scipy.spatial import ConvexHull, QhullError
 
 from ..tolerances import FLOOR_NORMAL_Z, FLOOR_TOLERANCE
 from ..validate import check_points, check_positive, check_range
+from .mesh import check_mesh
 from .surface import sample_surface
 
 #: names ``load_machine`` accepts
@@ -54,8 +55,7 @@ class Machine:
     notes: str = field(default="")
 
     def __post_init__(self):
-        if not isinstance(self.mesh, trimesh.Trimesh) or len(self.mesh.faces) == 0:
-            raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
+        check_mesh("mesh", self.mesh)
         footprint = check_points("footprint", self.footprint, dim=2)
         x, y = footprint[:, 0], footprint[:, 1]
         if len(footprint) < 3 or np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) <= 0:
@@ -84,9 +84,18 @@ def _difference(solid, cuts) -> trimesh.Trimesh:
 
 
 def footprint_from_mesh(mesh: trimesh.Trimesh) -> np.ndarray:
-    """Counter-clockwise convex hull (k, 2) of the mesh's vertices projected on the floor."""
-    xy = np.asarray(mesh.vertices)[:, :2]
-    hull = ConvexHull(xy)
+    """Counter-clockwise convex hull (k, 2) of the mesh's vertices projected on the floor.
+
+    Raises ``ValueError`` when that shadow has no area (every vertex on one vertical plane or
+    line, e.g. a single vertical triangle): such a mesh has no footprint.
+    """
+    xy = np.asarray(check_mesh("mesh", mesh).vertices)[:, :2]
+    try:
+        hull = ConvexHull(xy)
+    except QhullError:
+        raise ValueError("mesh has a floor shadow of zero area (all its vertices lie on one "
+                         "vertical plane or line), so it has no footprint; a machine needs a "
+                         "solid or a surface that spans x and y") from None
     return xy[hull.vertices].copy()  # scipy gives 2-D hull vertices counter-clockwise
 
 
@@ -191,9 +200,7 @@ def machine_from_mesh(mesh: trimesh.Trimesh, *, name: str = "custom", notes: str
     The mesh is copied and lowered so its lowest point is on the floor (z = 0); x and y are
     kept. The footprint is the convex hull of its floor shadow.
     """
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
-    copy = mesh.copy()
+    copy = check_mesh("mesh", mesh).copy()
     copy.apply_translation([0.0, 0.0, -copy.bounds[0, 2]])
     return Machine(name, copy, footprint_from_mesh(copy), notes)
 

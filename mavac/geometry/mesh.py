@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from ..validate import ParameterTypeError, check_path
+
 #: metres per unit for the units ``load_mesh`` accepts
 UNIT_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 UNIT_WORDS = {"m": "metres", "cm": "centimetres", "mm": "millimetres", "in": "inches"}
@@ -46,6 +48,27 @@ def _read(path: Path) -> trimesh.Trimesh:
     if not isinstance(loaded, trimesh.Trimesh):
         raise ValueError(f"path {str(path)!r} holds no triangle mesh (got {type(loaded).__name__})")
     return loaded
+
+
+def check_mesh(name: str, mesh) -> trimesh.Trimesh:
+    """A ``trimesh.Trimesh`` with at least one face, finite vertices and faces that index
+    them: the check every function taking a user's mesh runs first (``load_mesh`` refuses the
+    same in files; a mesh built in memory has not been through it).
+
+    Raises ``TypeError`` for another type, ``ValueError`` naming ``name`` otherwise.
+    """
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise ParameterTypeError(f"{name} must be a trimesh.Trimesh, got {type(mesh).__name__}")
+    faces = np.asarray(mesh.faces)
+    if len(faces) == 0:
+        raise ValueError(f"{name} must have at least one face")
+    vertices = np.asarray(mesh.vertices)
+    bad = int((~np.isfinite(vertices)).any(axis=1).sum())
+    if bad:
+        raise ValueError(f"{name} has {bad} vertices with NaN or infinite coordinates")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise ValueError(f"{name} has faces indexing vertices outside [0, {len(vertices) - 1}]")
+    return mesh
 
 
 def repair_mesh(mesh: trimesh.Trimesh) -> dict:
@@ -114,7 +137,7 @@ def load_mesh(path, units: str = "m") -> trimesh.Trimesh:
     """
     if units not in UNIT_SCALE:
         raise ValueError(f"units must be one of {sorted(UNIT_SCALE)}, got {units!r}")
-    path = Path(path)
+    path = check_path("path", path)
     if not path.is_file():
         raise ValueError(f"path {str(path)!r} does not exist or is not a file")
     if path.suffix.lower() not in MESH_SUFFIXES:

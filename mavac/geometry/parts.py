@@ -31,6 +31,7 @@ import numpy as np
 import trimesh
 
 from ..validate import check_int
+from .mesh import check_mesh
 
 #: every part ``load_part`` knows
 PART_NAMES = ("sine", "schwefel", "concave_bowl", "hyperboloid", "bowl", "hull")
@@ -72,8 +73,7 @@ class Part:
     notes: str = field(default="")
 
     def __post_init__(self):
-        if not isinstance(self.mesh, trimesh.Trimesh) or len(self.mesh.faces) == 0:
-            raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
+        check_mesh("mesh", self.mesh)
         n_faces = len(self.mesh.faces)
         stain = np.asarray(self.stain_faces)
         if stain.ndim != 1 or len(stain) == 0 or not np.issubdtype(stain.dtype, np.integer):
@@ -459,8 +459,7 @@ def part_from_mesh(mesh: trimesh.Trimesh, stain_faces, passes, name: str = "cust
         Defaults to ``passes / 3``.
     notes : str
     """
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
+    check_mesh("mesh", mesh)
     passes_array = np.asarray(passes)
     if intensity is None:
         intensity = passes_array / 3.0

@@ -15,6 +15,7 @@ import numpy as np
 import trimesh
 
 from ..validate import check_int, check_positive
+from .mesh import check_mesh
 
 
 @dataclass(frozen=True)
@@ -63,8 +64,7 @@ def sample_surface(mesh: trimesh.Trimesh, spacing: float, seed: int = 0) -> Surf
 
     check_positive("spacing", spacing)
     seed = check_int("seed", seed, 0, 2**31 - 1)
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
+    check_mesh("mesh", mesh)
     count = int(round(mesh.area / spacing**2))
     if count < 1:
         raise ValueError(f"spacing={spacing} m is larger than the mesh itself "

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 import trimesh
 
+from ..geometry.mesh import check_mesh
 from ..geometry.transforms import check_transform
 from ..validate import check_nonnegative
 from .kinematics import _check_q
@@ -54,10 +55,8 @@ class CollisionChecker:
 
     def __init__(self, robot, obstacle: trimesh.Trimesh | None = None, *, world_T_base=np.eye(4),
                  margin: float = 0.0, floor: bool = False):
-        if obstacle is not None and not isinstance(obstacle, trimesh.Trimesh):
-            raise ValueError(f"obstacle must be a trimesh.Trimesh or None, got {type(obstacle).__name__}")
-        if obstacle is not None and len(obstacle.faces) == 0:
-            raise ValueError("obstacle must have at least one face")
+        if obstacle is not None:
+            check_mesh("obstacle", obstacle)
         self.margin = float(check_nonnegative("margin", margin))
         self.robot = robot
         model = robot.model

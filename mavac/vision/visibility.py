@@ -32,6 +32,7 @@ import time
 import numpy as np
 import trimesh
 
+from ..geometry.mesh import check_mesh
 from ..geometry.transforms import check_transforms
 from ..params import CameraParams
 from ..tolerances import RAY_EPS_RELATIVE
@@ -127,8 +128,7 @@ class VisibilityScene:
     """
 
     def __init__(self, mesh: trimesh.Trimesh, eps: float | None = None):
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-            raise ValueError("mesh must be a non-empty trimesh.Trimesh")
+        check_mesh("mesh", mesh)
         self.vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
         self.faces = np.ascontiguousarray(mesh.faces, dtype=np.uint32)
         self.scale = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
