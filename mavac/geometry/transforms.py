@@ -8,6 +8,10 @@ vectors are row arrays ``(n, 3)``.
 A mobile base pose is SE(2) ``(x, y, theta)`` (m, m, rad) -> ``world_T_base``
 (:func:`se2_matrices`, :func:`se2_to_matrix`): a rotation about the world z axis
 (:func:`rz`) and a translation in the floor plane.
+
+Every function here that takes a pose checks it with :func:`check_transforms` (finite,
+orthonormal rotation of determinant +1, last row ``0 0 0 1``): a scale or shear typed by
+mistake is refused, never silently applied. Functions elsewhere that take a pose call it too.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..tolerances import RIGID_ATOL
-from ..validate import check_points, check_range
+from ..validate import check_array, check_points, check_range
 
 
 def check_transforms(name: str, transforms) -> np.ndarray:
@@ -38,18 +42,23 @@ def check_transforms(name: str, transforms) -> np.ndarray:
         Unless finite, with a rotation orthonormal to :data:`mavac.tolerances.RIGID_ATOL`,
         of determinant +1, and a last row ``0 0 0 1``.
     """
-    T = np.asarray(transforms, dtype=float)
+    T = check_array(name, transforms, float)
+    shape = T.shape
     if T.ndim == 2:
         T = T[None]
     if T.ndim != 3 or T.shape[1:] != (4, 4):
-        raise ValueError(f"{name} must have shape (4, 4) or (m, 4, 4), got {np.shape(transforms)}")
+        raise ValueError(f"{name} must have shape (4, 4) or (m, 4, 4), got {shape}")
     if not np.all(np.isfinite(T)):
         raise ValueError(f"{name} contains NaN or infinite values")
     R = T[:, :3, :3]
     deviation = np.abs(np.einsum("mji,mjk->mik", R, R) - np.eye(3))
     last_row = np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0])
     if np.max(deviation, initial=0.0) > RIGID_ATOL or np.max(last_row, initial=0.0) > RIGID_ATOL:
-        raise ValueError(f"{name} must be rigid transforms (orthonormal rotation, last row 0 0 0 1)")
+        worst = int(np.argmax(np.maximum(deviation.max(axis=(1, 2)), last_row.max(axis=1))))
+        lengths = ", ".join(f"{v:.4g}" for v in np.linalg.norm(R[worst], axis=0))
+        raise ValueError(f"{name} must be rigid transforms (orthonormal rotation, last row 0 0 0 1); "
+                         f"transform {worst} has rotation columns of length {lengths} and last row "
+                         f"{T[worst, 3].tolist()} (a scale or shear is not a pose)")
     if np.any(np.linalg.det(R) < 0):
         raise ValueError(f"{name} rotation has determinant -1 (a reflection), expected +1")
     return T
@@ -57,14 +66,28 @@ def check_transforms(name: str, transforms) -> np.ndarray:
 
 def check_transform(name: str, transform) -> np.ndarray:
     """:func:`check_transforms` for exactly one transform; returns it as (4, 4) float."""
-    if np.shape(transform) != (4, 4):
-        raise ValueError(f"{name} must have shape (4, 4), got {np.shape(transform)}")
-    return check_transforms(name, transform)[0]
+    T = check_array(name, transform, float)
+    if T.shape != (4, 4):
+        raise ValueError(f"{name} must have shape (4, 4), got {T.shape}")
+    return check_transforms(name, T)[0]
+
+
+def check_rotation(name: str, rotation) -> np.ndarray:
+    """A (3, 3) rotation matrix (orthonormal, determinant +1), checked as the rotation part of
+    a pose by :func:`check_transforms`; returns it as float."""
+    R = check_array(name, rotation, float)
+    if R.shape != (3, 3):
+        raise ValueError(f"{name} must have shape (3, 3), got {R.shape}")
+    T = np.eye(4)
+    T[:3, :3] = R
+    return check_transforms(name, T)[0, :3, :3]
 
 
 def rz(theta) -> np.ndarray:
     """Rotations about z by ``theta`` (rad): ``(3, 3)`` for a scalar, ``(..., 3, 3)`` else."""
-    theta = np.asarray(theta, dtype=float)
+    theta = check_array("theta", theta, float)
+    if not np.all(np.isfinite(theta)):
+        raise ValueError("theta contains NaN or infinite values")
     c, s = np.cos(theta), np.sin(theta)
     R = np.zeros(theta.shape + (3, 3))
     R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1] = c, -s, s, c
@@ -88,25 +111,31 @@ def se2_to_matrix(x: float, y: float, theta: float) -> np.ndarray:
     return se2_matrices(np.array([[x, y, theta]], dtype=float))[0]
 
 
+def _rigid(name: str, transforms) -> np.ndarray:
+    """:func:`check_transforms`, keeping the shape given: (4, 4) stays (4, 4)."""
+    T = check_array(name, transforms, float)
+    return check_transforms(name, T).reshape(T.shape)
+
+
 def compose(*transforms) -> np.ndarray:
     """``a_T_b @ b_T_c @ ...`` (stacks broadcast): ``compose(world_T_base, base_T_camera)``."""
     if not transforms:
         raise ValueError("compose needs at least one transform")
-    out = np.asarray(transforms[0], dtype=float)
-    for T in transforms[1:]:
-        out = out @ np.asarray(T, dtype=float)
+    out = _rigid("transforms[0]", transforms[0])
+    for i, T in enumerate(transforms[1:], start=1):
+        out = out @ _rigid(f"transforms[{i}]", T)
     return out
 
 
 def transform_points(a_T_b, points_b) -> np.ndarray:
     """Points of frame *b* expressed in frame *a*, ``R p + t``: (4, 4) and (n, 3) -> (n, 3)."""
-    T = np.asarray(a_T_b, dtype=float)
+    T = check_transform("a_T_b", a_T_b)
     return np.asarray(points_b, dtype=float) @ T[:3, :3].T + T[:3, 3]
 
 
 def rotate_vectors(a_T_b, vectors_b) -> np.ndarray:
     """Directions of frame *b* expressed in frame *a*, ``R v``: (n, 3) -> (n, 3)."""
-    return np.asarray(vectors_b, dtype=float) @ np.asarray(a_T_b, dtype=float)[:3, :3].T
+    return np.asarray(vectors_b, dtype=float) @ check_transform("a_T_b", a_T_b)[:3, :3].T
 
 
 def points_in_frame(a_T_b, points_a) -> np.ndarray:
@@ -114,7 +143,7 @@ def points_in_frame(a_T_b, points_a) -> np.ndarray:
 
     ``a_T_b`` (4, 4) gives (n, 3); a stack (m, 4, 4) gives (m, n, 3), one set per frame.
     """
-    T = np.asarray(a_T_b, dtype=float)
+    T = _rigid("a_T_b", a_T_b)
     P = np.asarray(points_a, dtype=float)
     if T.ndim == 3:
         return (P[None, :, :] - T[:, None, :3, 3]) @ T[:, :3, :3]
@@ -123,4 +152,4 @@ def points_in_frame(a_T_b, points_a) -> np.ndarray:
 
 def vectors_in_frame(a_T_b, vectors_a) -> np.ndarray:
     """Directions of frame *a* expressed in frame *b*, ``R^T v``: (n, 3) -> (n, 3)."""
-    return np.asarray(vectors_a, dtype=float) @ np.asarray(a_T_b, dtype=float)[:3, :3]
+    return np.asarray(vectors_a, dtype=float) @ check_transform("a_T_b", a_T_b)[:3, :3]

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.transforms import compose, points_in_frame, vectors_in_frame
+from ..geometry.transforms import check_transform, compose, points_in_frame, vectors_in_frame
 from ..params import CameraParams, GuardParams
 from ..planning.greedy import GreedyResult, greedy_select
 from ..robots.kinematics import fk, ik_axis, maneuverability
-from ..validate import check_points, check_positive
+from ..validate import check_indices, check_points, check_positive
 from ..vision.camera import OPTICAL_AXIS, fov_masks
 from ..vision.visibility import visible_from
 
@@ -144,7 +144,7 @@ def camera_configurations(robot, checker, world_T_base, positions, axes, rng, q0
     n_ik : int
         IK successes before the collision check.
     """
-    T = np.asarray(world_T_base, dtype=float)
+    T = check_transform("world_T_base", world_T_base)
     if len(positions) == 0:
         return np.zeros(0, dtype=bool), np.zeros((0, robot.nq)), 0
     res = ik_axis(robot, points_in_frame(T, positions), vectors_in_frame(T, axes), frame=robot.camera_frame, frame_axis=OPTICAL_AXIS,
@@ -173,7 +173,7 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
     camera : CameraParams
     rng : numpy.random.Generator
     """
-    targets = np.asarray(targets, dtype=np.int64)
+    targets = check_indices("targets", targets, len(points))
     positions = points[targets] + camera.L_d * normals[targets]
     ok, q, n_ik = camera_configurations(robot, checker, world_T_base, positions, -normals[targets], rng)
     q = q[ok]

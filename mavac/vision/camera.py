@@ -23,7 +23,7 @@ import numpy as np
 from ..geometry.transforms import check_transform, check_transforms, points_in_frame
 from ..params import CameraParams
 from ..tolerances import FAR_PLANE_RTOL, PARALLEL_TOL
-from ..validate import check_points, check_positive
+from ..validate import check_instance, check_points, check_positive
 
 #: Column of the camera frame's rotation that is MAVAC's optical axis (camera x, see
 #: :class:`mavac.params.CameraParams`); ``ik_axis(..., frame=camera_frame, frame_axis=OPTICAL_AXIS)``.
@@ -72,6 +72,7 @@ def fov_masks(points_world, world_T_cameras, camera: CameraParams) -> np.ndarray
     """
     P = check_points("points_world", points_world)
     T = check_transforms("world_T_cameras", world_T_cameras)
+    check_instance("camera", camera, CameraParams)
     tan_a, tan_b = np.tan(camera.theta_a), np.tan(camera.theta_b)
     far = camera.L_d * (1.0 + FAR_PLANE_RTOL)
     out = np.zeros((T.shape[0], P.shape[0]), dtype=bool)

@@ -20,7 +20,7 @@ import trimesh
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from ..geometry.transforms import check_transform
+from ..geometry.transforms import check_rotation, check_transform
 from ..parallel import map_trials
 from ..params import ICPParams
 from ..validate import check_int, check_nonnegative, check_points, check_positive
@@ -33,7 +33,8 @@ _ADDS_POINTS = 2000
 
 def rotation_error(R_a, R_b) -> float:
     """Angle of the rotation ``R_a^T R_b``, rad in [0, pi] (via the quaternion: accurate near 0)."""
-    return float(Rotation.from_matrix(np.asarray(R_a).T @ np.asarray(R_b)).magnitude())
+    R_a, R_b = check_rotation("R_a", R_a), check_rotation("R_b", R_b)
+    return float(Rotation.from_matrix(R_a.T @ R_b).magnitude())
 
 
 def model_samples(mesh: trimesh.Trimesh, n_points: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
