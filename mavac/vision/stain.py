@@ -9,7 +9,8 @@
 * :func:`passes_from_image` -- pixelwise vector quantisation into ``N_c`` colours mapped to
   0..N_c-1 cleaning passes by RGB norm (Fig. 5).
 
-Images are ``(H, W, 3)`` uint8 RGB.
+Images are ``(H, W, 3)`` RGB, uint8 or float in [0, 1] (:func:`check_image` converts the
+float ones explicitly and refuses any other dtype, range or shape).
 """
 
 from __future__ import annotations
@@ -22,7 +23,13 @@ import trimesh
 from sklearn.cluster import KMeans
 
 from ..parallel import single_thread
-from ..validate import check_int, check_nonnegative, check_points, check_range
+from ..validate import (check_array, check_indices, check_int, check_nonnegative, check_points, check_range,
+                        check_size)
+
+
+#: Pixels a rendered image may have: 4096 x 4096, 1000 times the 128 x 128 images we measure
+#: with (one ray per pixel; ~17 M rays already take tens of seconds).
+MAX_PIXELS = 4096 * 4096
 
 
 @dataclass(frozen=True)
@@ -60,7 +67,7 @@ def view_of_faces(mesh: trimesh.Trimesh, faces=None, *, direction=None, margin: 
     margin : float
         Relative margin around the projected bounding box.
     """
-    faces = np.arange(len(mesh.faces)) if faces is None else np.asarray(faces, dtype=int)
+    faces = np.arange(len(mesh.faces)) if faces is None else check_indices("faces", faces, len(mesh.faces))
     if faces.size == 0:
         raise ValueError("faces must select at least one face to frame")
     if direction is None:
@@ -98,7 +105,10 @@ def face_index_image(mesh: trimesh.Trimesh, view, image_size=(96, 96)) -> np.nda
     (H, W) int
     """
     view = view if isinstance(view, OrthoView) else view_of_faces(mesh, direction=view, margin=0.02)
+    if np.shape(image_size) != (2,):
+        raise ValueError(f"image_size must be a pair (H, W) of pixel counts, got {image_size!r}")
     H, W = (check_int("image_size", s, 1) for s in image_size)
+    check_size("image_size", image_size, H * W, MAX_PIXELS, "pixels (one ray each)")
     d, right, down = view.basis()
     center = np.asarray(view.center, dtype=float)
     # Pixel centres, image aspect follows the pixel grid; square pixels covering the view.
@@ -169,11 +179,33 @@ def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, *, image_size=(9
     return np.clip(np.rint(colour * 255), 0, 255).astype(np.uint8)
 
 
-def _check_image(image) -> np.ndarray:
-    image = np.asarray(image)
-    if image.ndim != 3 or image.shape[2] != 3:
-        raise ValueError(f"image must be (H, W, 3) RGB, got shape {image.shape}")
-    return image.astype(np.uint8) if image.dtype != np.uint8 else image
+def _value_range(a: np.ndarray) -> str:
+    if a.size == 0:
+        return "empty"
+    if a.dtype.kind not in "biuf":
+        return "not numeric"
+    nan = " with NaN" if a.dtype.kind == "f" and np.isnan(a).any() else ""
+    if nan and np.isnan(a).all():
+        return "all NaN"
+    return f"[{np.nanmin(a)}, {np.nanmax(a)}]{nan}"
+
+
+def check_image(name: str, image) -> np.ndarray:
+    """A non-empty ``(H, W, 3)`` RGB image as uint8: uint8 is taken as it is, a float image
+    in [0, 1] is scaled by 255 and rounded (as :func:`render_stain_image` writes its pixels).
+
+    Every other dtype (uint16, int, bool), a float outside [0, 1] or with NaN, another shape
+    or an empty image is refused with a ``ValueError`` naming ``name``, the dtype, the value
+    range and the shape: a silent cast would wrap or truncate the colours.
+    """
+    a = check_array(name, image)
+    shape_ok = a.ndim == 3 and a.shape[2] == 3 and a.size > 0
+    if shape_ok and a.dtype == np.uint8:
+        return a
+    if shape_ok and a.dtype.kind == "f" and np.all((a >= 0.0) & (a <= 1.0)):
+        return np.rint(a * 255.0).astype(np.uint8)
+    raise ValueError(f"{name} must be a non-empty (H, W, 3) RGB image, uint8 or float in [0, 1]; "
+                     f"got dtype {a.dtype}, range {_value_range(a)}, shape {a.shape}")
 
 
 def _region(region_mask, shape) -> np.ndarray:
@@ -216,7 +248,7 @@ def stain_masks_kmeans(images, seed: int = 0, *, region_mask=None, light_stain: 
 
     Parameters
     ----------
-    images : sequence of (H, W, 3) uint8
+    images : sequence of (H, W, 3) uint8, or float in [0, 1]
     seed : int
         K-means seed.
     region_mask : (H, W) bool, optional
@@ -236,7 +268,10 @@ def stain_masks_kmeans(images, seed: int = 0, *, region_mask=None, light_stain: 
     -------
     list of (H, W) bool
     """
-    images = [_check_image(im) for im in images]
+    if isinstance(images, np.ndarray) and images.ndim == 3:
+        raise ValueError(f"images must be a sequence of (H, W, 3) images, got one array of shape "
+                         f"{images.shape}; use stain_mask_kmeans for one image")
+    images = [check_image(f"images[{i}]", im) for i, im in enumerate(images)]
     if not images:
         raise ValueError("images must contain at least one image")
     shape = images[0].shape[:2]
@@ -277,8 +312,9 @@ def stain_mask_kmeans(image, seed: int = 0, *, region_mask=None, light_stain: bo
 
     See :func:`stain_masks_kmeans` for the parameters. Returns ``(H, W)`` bool (True = stain).
     """
-    return stain_masks_kmeans([image], seed, region_mask=region_mask, light_stain=light_stain, part_rgb=part_rgb,
-                              min_contrast=min_contrast, denoise=denoise)[0]
+    return stain_masks_kmeans([check_image("image", image)], seed, region_mask=region_mask,
+                              light_stain=light_stain, part_rgb=part_rgb, min_contrast=min_contrast,
+                              denoise=denoise)[0]
 
 
 def cleaning_performance(mask_before, mask_after, region_mask=None) -> float:
@@ -317,7 +353,7 @@ def passes_from_image(image, *, n_clusters: int = 4, seed: int = 0, light_stain:
 
     Parameters
     ----------
-    image : (H, W, 3) uint8
+    image : (H, W, 3) uint8, or float in [0, 1]
     n_clusters : int >= 2
     seed : int
     light_stain : bool
@@ -328,7 +364,7 @@ def passes_from_image(image, *, n_clusters: int = 4, seed: int = 0, light_stain:
     -------
     (H, W) int -- passes in 0..n_clusters-1, -1 outside ``region_mask``.
     """
-    image = _check_image(image)
+    image = check_image("image", image)
     n_clusters = check_int("n_clusters", n_clusters, 2, 16)
     check_int("seed", seed, 0)
     region = _region(region_mask, image.shape[:2])
