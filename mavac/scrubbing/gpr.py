@@ -52,7 +52,8 @@ from tqdm.auto import tqdm
 
 from ..parallel import single_thread
 from ..params import OPERATION_PARAMS, GPRParams
-from ..validate import check_int, check_nonnegative, check_points
+from ..validate import (ParameterTypeError, check_array, check_callable, check_instance, check_int,
+                        check_nonnegative, check_points, check_real)
 
 __all__ = ["GPRParams", "GPRResult", "DenseOptimum", "OPERATION_PARAMS", "objective", "coarse_grid",
            "fit_surrogate", "feasibility_probability", "learn_parameters", "random_search",
@@ -202,10 +203,31 @@ def _candidates(params: GPRParams, rng: np.random.Generator, grid_U, run_U, cent
     return np.vstack(parts)
 
 
+def _run(experiment, x, rng) -> float:
+    """One experiment, the only place its results enter: ``C_p`` must be a finite real number
+    (a NaN or ``None`` would otherwise fail inside scikit-learn, far from its cause)."""
+    cp = experiment(x, rng)
+    if isinstance(cp, np.ndarray) and cp.size == 1:
+        cp = cp.reshape(())[()]
+    try:
+        value = check_real("experiment", cp)
+    except TypeError:
+        raise ParameterTypeError(f"experiment must return C_p as a real number, got {cp!r} "
+                                 f"({type(cp).__name__}) at {_where(x)}") from None
+    if not np.isfinite(value):
+        raise ValueError(f"experiment returned C_p = {cp!r} at {_where(x)}; it must be a finite "
+                         "number (a failed measurement has to be repeated or reported, not passed on)")
+    return value
+
+
+def _where(x) -> str:
+    return ", ".join(f"{n}={v:.4g}" for n, v in zip(OPERATION_PARAMS, x))
+
+
 def _record(rows, x, cp, phase, p, params, experiment):
     row = {"experiment": len(rows) + 1, "phase": phase}
     row.update(dict(zip(OPERATION_PARAMS, map(float, x))))
-    row["C_p"] = float(cp)
+    row["C_p"] = cp
     row["objective"] = float(objective(x[None], params)[0])
     row["p_feasible"] = float(p)
     if hasattr(experiment, "mean"):
@@ -236,6 +258,13 @@ def _fit_history(history: pd.DataFrame, params: GPRParams, seed: int):
     return U_run, gp, feasibility_probability(gp, U_run, params.Cp_th)
 
 
+def _check_learner_inputs(experiment, params, rng) -> None:
+    check_callable("experiment", experiment, "(x (5,), rng) -> C_p")
+    check_instance("params", params, GPRParams)
+    if rng is not None:
+        check_instance("rng", rng, np.random.Generator)
+
+
 def learn_parameters(experiment, params: GPRParams = GPRParams(),
                      *, rng: np.random.Generator | None = None, progress: bool = False) -> GPRResult:
     """Learn operation parameters meeting ``C_p >= C_p^th`` (Kabir, Sec. VIII); see the module doc.
@@ -254,12 +283,13 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
     -------
     GPRResult
     """
+    _check_learner_inputs(experiment, params, rng)
     rng = np.random.default_rng(params.seed) if rng is None else rng
     rows: list = []
     grid = coarse_grid(params)
     bar = tqdm(total=params.max_experiments, disable=not progress, leave=False, desc="GPR")
     for x in grid[: params.max_experiments]:
-        _record(rows, x, experiment(x, rng), "explore", np.nan, params, experiment)
+        _record(rows, x, _run(experiment, x, rng), "explore", np.nan, params, experiment)
         bar.update()
     grid_U = _to_unit(grid, params)
     stop_reason = "budget"
@@ -293,7 +323,7 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
             break
         # Another run point chosen again is replicated (its noise gets averaged).
         x = _from_unit(cand_U[pick], params)
-        _record(rows, x, experiment(x, rng), phase, prob[pick], params, experiment)
+        _record(rows, x, _run(experiment, x, rng), phase, prob[pick], params, experiment)
         bar.update()
     bar.close()
     history = pd.DataFrame(rows)
@@ -311,14 +341,25 @@ def random_search(experiment, params: GPRParams = GPRParams(), *, budget: int = 
     The answer is the best-objective point whose measured C_p met the threshold.
     """
     budget = check_int("budget", budget, 1)
+    _check_learner_inputs(experiment, params, rng)
     rng = np.random.default_rng(params.seed) if rng is None else rng
     rows: list = []
     for _ in range(budget):
         x = _from_unit(rng.uniform(size=len(OPERATION_PARAMS)), params)
-        _record(rows, x, experiment(x, rng), "random", np.nan, params, experiment)
+        _record(rows, x, _run(experiment, x, rng), "random", np.nan, params, experiment)
     history = pd.DataFrame(rows)
     chosen = _chosen(history, _best_row(history, history["C_p"].to_numpy() >= params.Cp_th))
     return GPRResult(history, chosen, chosen is not None, budget, "budget")
+
+
+def _model_values(experiment_mean, X) -> np.ndarray:
+    """``experiment_mean(X)`` checked: one finite C_p per row of ``X``."""
+    cp = check_array("experiment_mean", experiment_mean(X), float)
+    if cp.shape != (len(X),):
+        raise ValueError(f"experiment_mean must return ({len(X)},) C_p values, got shape {cp.shape}")
+    if not np.all(np.isfinite(cp)):
+        raise ValueError("experiment_mean returned NaN or infinite C_p values; it must be finite")
+    return cp
 
 
 def dense_optimum(experiment_mean, params: GPRParams = GPRParams(), *, points_per_axis=(33, 33, 13, 13, 13),
@@ -340,6 +381,8 @@ def dense_optimum(experiment_mean, params: GPRParams = GPRParams(), *, points_pe
     -------
     DenseOptimum
     """
+    check_callable("experiment_mean", experiment_mean, "(X (n, 5)) -> (n,) C_p")
+    check_instance("params", params, GPRParams)
     counts = [check_int("points_per_axis", n, 2) for n in points_per_axis]
     if len(counts) != len(OPERATION_PARAMS):
         raise ValueError(f"points_per_axis must have {len(OPERATION_PARAMS)} entries, got {len(counts)}")
@@ -353,14 +396,14 @@ def dense_optimum(experiment_mean, params: GPRParams = GPRParams(), *, points_pe
         order = np.argsort(-J, kind="stable")
         for start in range(0, len(order), chunk):  # best objective first: stop at first feasible
             idx = order[start:start + chunk]
-            cp = np.asarray(experiment_mean(X[idx]), dtype=float)
+            cp = _model_values(experiment_mean, X[idx])
             hit = np.flatnonzero(cp >= params.Cp_th)
             if hit.size:
                 i = idx[hit[0]]
                 top = J[i]
                 # Among equal-objective feasible points keep the one with the largest C_p.
                 same = idx[hit][np.isclose(J[idx[hit]], top)]
-                cps = np.asarray(experiment_mean(X[same]), dtype=float)
+                cps = _model_values(experiment_mean, X[same])
                 j = same[int(np.argmax(cps))]
                 return U[j], float(J[j]), float(cps.max())
         return None, np.nan, np.nan
