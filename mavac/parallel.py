@@ -16,6 +16,8 @@ from joblib import Parallel, delayed
 from threadpoolctl import ThreadpoolController
 from tqdm.auto import tqdm
 
+from .validate import check_int
+
 
 @functools.lru_cache(maxsize=1)
 def _threadpools() -> ThreadpoolController:
@@ -50,7 +52,12 @@ def map_trials(fn: Callable, items: Iterable, *, n_jobs: int | None = None, back
     """
     items: Sequence = list(items)
     if n_jobs is None:
-        n_jobs = int(os.environ.get("MAVAC_JOBS", "1"))
+        env = os.environ.get("MAVAC_JOBS", "1")
+        try:
+            n_jobs = int(env)
+        except ValueError:
+            raise ValueError(f"MAVAC_JOBS must be an integer worker count, got {env!r}") from None
+    n_jobs = check_int("n_jobs", n_jobs, -1)
     if n_jobs == 0:
         raise ValueError("n_jobs must be a positive worker count or -1 (all cores), got 0")
     iterator = tqdm(items, desc=desc, disable=not progress, leave=False)

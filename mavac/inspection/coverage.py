@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validate import check_bool_array, check_int
+
 
 def _as_visibility(visible) -> np.ndarray:
-    v = np.asarray(visible, dtype=bool)
+    v = check_bool_array("visible", visible)
     if v.ndim == 1:
         v = v[None, :]
     if v.ndim != 2:
@@ -50,7 +52,7 @@ def coverage_overlap(visible, n_elements: int | None = None) -> tuple[float, flo
         Fraction of S covered at least once, and at least twice.
     """
     v = _as_visibility(visible)
-    n = v.shape[1] if n_elements is None else int(n_elements)
+    n = v.shape[1] if n_elements is None else check_int("n_elements", n_elements, 1)
     if n <= 0:
         raise ValueError(f"n_elements must be positive, got {n}")
     counts = v.sum(axis=0)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tolerances import GREEDY_TIE_RTOL
-from ..validate import check_unit
+from ..validate import check_array, check_bool_array, check_unit
 
 
 @dataclass(frozen=True)
@@ -74,17 +74,17 @@ def _check_greedy_inputs(access, P, weights, k1, k2, covered):
     check_unit("P", P)
     check_unit("k1", k1)
     check_unit("k2", k2)
-    access = np.asarray(access, dtype=bool)
+    access = check_bool_array("access", access)
     if access.ndim != 2:
         raise ValueError(f"access must be a 2-D (candidates, elements) bool array, got shape {access.shape}")
     m, n = access.shape
     if weights is not None:
-        weights = np.asarray(weights, dtype=float)
+        weights = check_array("weights", weights, float)
         if weights.shape != (m,):
             raise ValueError(f"weights must have shape ({m},), got {weights.shape}")
         if np.any(~np.isfinite(weights)) or np.any(weights < 0) or np.any(weights > 1):
             raise ValueError("weights must be in [0, 1]")
-    done = np.zeros(n, dtype=bool) if covered is None else np.asarray(covered, dtype=bool).copy()
+    done = np.zeros(n, dtype=bool) if covered is None else check_bool_array("covered", covered).copy()
     if done.shape != (n,):
         raise ValueError(f"covered must have shape ({n},), got {done.shape}")
     return access, weights, done

@@ -22,6 +22,7 @@ import numpy as np
 from ..params import LissajousParams, ScrubModel, SetupSpaceParams, ToolpathParams
 from ..setups.reach import base_T_part
 from ..sim.wear import ScrubExperiment, render_stain_states, scrub_faces, stain_hardness
+from ..validate import check_indices, check_int, check_points
 from ..vision.stain import (cleaning_performance, face_index_image, passes_from_image, stain_masks_kmeans,
                             view_of_faces)
 from .toolpath import ToolPath, reachable_from_robot, toolpath_for_setup
@@ -44,17 +45,19 @@ def toolpaths_for_plan(part, setups, patches, robot, *, params: ToolpathParams =
     space : SetupSpaceParams
         Pose of the part for a setup (:func:`mavac.setups.reach.base_T_part`).
     """
-    poses = base_T_part(np.asarray(setups, dtype=float).reshape(-1, 3), space)
+    poses = base_T_part(check_points("setups", setups), space)
+    if len(patches) != len(poses):
+        raise ValueError(f"patches must hold one index array per setup ({len(poses)}), got {len(patches)}")
     reachable = reachable_from_robot(robot)
-    return [toolpath_for_setup(part, T, np.asarray(p, dtype=np.int64), params, reachable=reachable)
-            for T, p in zip(poses, patches)]
+    return [toolpath_for_setup(part, T, p, params, reachable=reachable) for T, p in zip(poses, patches)]
 
 
 def cover_from_patches(patches, n_patches: int) -> np.ndarray:
     """Cover matrix ``(k, n)`` bool of a plan: row j marks the patches setup j cleans."""
+    n_patches = check_int("n_patches", n_patches, 0)
     cover = np.zeros((len(patches), n_patches), dtype=bool)
     for j, p in enumerate(patches):
-        cover[j, np.asarray(p, dtype=np.int64)] = True
+        cover[j, check_indices(f"patches[{j}]", p, n_patches)] = True
     return cover
 
 

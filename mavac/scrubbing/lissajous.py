@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from ..params import LissajousParams
-from ..validate import check_points, check_positive
+from ..validate import check_array, check_instance, check_points, check_positive
 
 
 class Overlay(NamedTuple):
@@ -51,7 +51,8 @@ def lissajous_force(t, params: LissajousParams = LissajousParams()) -> np.ndarra
     -------
     (n, 2) float, newtons -- ``(F_x, F_y)`` in the tool frame.
     """
-    t = np.atleast_1d(np.asarray(t, dtype=float))
+    check_instance("params", params, LissajousParams)
+    t = np.atleast_1d(check_array("t", t, float))
     if t.ndim != 1 or not np.all(np.isfinite(t)):
         raise ValueError(f"t must be a finite 1-D array of times, got shape {t.shape}")
     fx = params.A_x * np.sin(2 * np.pi * params.f_x * t + params.phase)
@@ -104,6 +105,7 @@ def overlay_path(path, frames, params: LissajousParams = LissajousParams(), *, s
     Overlay
         ``(t, positions, forces)``, see :class:`Overlay`.
     """
+    check_instance("params", params, LissajousParams)
     path = check_points("path", path, 3)
     if len(path) < 2:
         raise ValueError(f"path must have at least 2 waypoints, got {len(path)}")

@@ -49,7 +49,7 @@ from ..params import SetupSpaceParams, ToolpathParams
 from ..robots.kinematics import ik_axis
 from ..setups.reach import base_T_part
 from ..tolerances import COUNT_SLACK
-from ..validate import check_int, check_points
+from ..validate import check_indices, check_instance, check_int, check_points, check_size
 
 # Dense samples per waypoint interval when a spline is evaluated (length, coverage, output).
 _SPLINE_SUBDIVISION = 4
@@ -59,6 +59,12 @@ _ON_STAIN_TOLERANCE = 0.05
 _MAX_LINK_GAP = 2.0
 # At most this many raises of a repositioning move to clear the part.
 _MAX_RAISES = 20
+# Size limits of one setup's tool path, far above any real use, so that a tiny tool width or
+# waypoint spacing typed by mistake fails at once instead of slicing and running IK for hours:
+# cutting planes (stain extent / tool width; Sine at paper scale has ~55) and waypoints (stain
+# area / (tool width x spacing) + extent / spacing; Sine has ~2,000).
+MAX_PLANES = 10_000
+MAX_WAYPOINTS = 100_000
 
 Reachable = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -205,7 +211,7 @@ def reachable_from_robot(robot, *, world_T_base=None, frame: str | None = None) 
         ``reachable(positions (n,3) world m, axes (n,3) unit) -> (n,) bool`` with one batched
         :func:`mavac.robots.kinematics.ik_axis` call.
     """
-    base_T_world = np.linalg.inv(np.eye(4) if world_T_base is None else np.asarray(world_T_base, float))
+    base_T_world = np.linalg.inv(np.eye(4) if world_T_base is None else check_transform("world_T_base", world_T_base))
 
     def reachable(positions: np.ndarray, axes: np.ndarray) -> np.ndarray:
         if len(positions) == 0:
@@ -508,6 +514,18 @@ def _covered(part_world, faces, segments, tool_width) -> np.ndarray:
     return dist <= np.hypot(0.5 * tool_width, 0.5 * d)
 
 
+def _check_path_size(part, faces: np.ndarray, params: ToolpathParams) -> None:
+    """Refuse a tool width or waypoint spacing that would make an absurdly large path."""
+    if faces.size == 0:
+        return
+    corners = np.asarray(part.mesh.vertices)[np.asarray(part.mesh.faces)[faces]].reshape(-1, 3)
+    extent = float(np.linalg.norm(np.ptp(corners, axis=0)))
+    area = float(np.asarray(part.mesh.area_faces)[faces].sum())
+    w, s = params.tool_width_m, params.waypoint_spacing_m
+    check_size("tool_width_m", w, extent / w, MAX_PLANES, "cutting planes")
+    check_size("waypoint_spacing_m", s, area / (w * s) + extent / s, MAX_WAYPOINTS, "waypoints")
+
+
 def toolpath_for_setup(part, world_T_part, patch_ids, params: ToolpathParams = ToolpathParams(),
                        *, reachable: Reachable | None = None, plane_normal=None) -> ToolPath:
     """Multi-pass tool path of one setup (Kabir, Sec. VI).
@@ -537,14 +555,8 @@ def toolpath_for_setup(part, world_T_part, patch_ids, params: ToolpathParams = T
     T = check_transform("world_T_part", world_T_part)
     stain_faces = np.asarray(part.stain_faces, dtype=np.int64)
     passes = np.asarray(part.passes, dtype=np.int64)
-    ids = np.asarray(patch_ids)
-    if ids.dtype == bool:
-        if ids.shape != stain_faces.shape:
-            raise ValueError(f"patch_ids mask must have shape {stain_faces.shape}, got {ids.shape}")
-        ids = np.flatnonzero(ids)
-    ids = ids.astype(np.int64).ravel()
-    if ids.size and (ids.min() < 0 or ids.max() >= len(stain_faces)):
-        raise ValueError(f"patch_ids must index the {len(stain_faces)} stain patches")
+    ids = check_indices("patch_ids", patch_ids, len(stain_faces))
+    _check_path_size(part, stain_faces[ids], check_instance("params", params, ToolpathParams))
     if plane_normal is not None:
         plane_normal = check_points("plane_normal", plane_normal)[0]
         if np.linalg.norm(plane_normal) == 0:

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..params import SamplingParams, SetupSpaceParams
 from ..tolerances import COUNT_SLACK
-from ..validate import check_int, check_positive
+from ..validate import check_int, check_positive, check_size
 from .dominance import nondominated
 from .reach import CountingReach, lookup_reach, setup_keys  # noqa: F401  (re-exported)
 
@@ -71,6 +71,11 @@ def variant_plan(variant: str) -> tuple[tuple[str, ...], tuple[tuple[int, ...], 
 
 
 # ---------------------------------------------------------------- setup space and grids
+
+
+#: Setups a uniform grid may have: 60 times the paper's 16,317 (50 mm x 50 mm x 10 deg); a
+#: tiny resolution would otherwise exhaust memory (and the reach sweep would run for days).
+MAX_GRID_SETUPS = 1_000_000
 
 
 def _resolution(space: SetupSpaceParams, resolution) -> np.ndarray:
@@ -119,6 +124,8 @@ def uniform_setups(space: SetupSpaceParams, resolution=None) -> np.ndarray:
         Rows ``(x [m], y [m], alpha [rad])``.
     """
     xs, ys, alphas = grid_axes(space, resolution)
+    check_size("resolution", _resolution(space, resolution).tolist(), len(xs) * len(ys) * len(alphas),
+               MAX_GRID_SETUPS, "setups")
     grid = np.stack(np.meshgrid(xs, ys, alphas, indexing="ij"), axis=-1)
     return grid.reshape(-1, 3)
 

@@ -41,7 +41,7 @@ import numpy as np
 import trimesh
 
 from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
-from ..validate import check_int, check_points
+from ..validate import check_array, check_instance, check_int, check_points
 from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
                                 render_stain_image, stain_masks_kmeans, view_of_faces)
 
@@ -145,7 +145,9 @@ def scrub_faces(face_stain, params: LissajousParams, *, hardness=None,
     -------
     (F,) float in [0, 1] -- stain after the pass.
     """
-    face_stain = np.asarray(face_stain, dtype=float)
+    check_instance("params", params, LissajousParams)
+    check_instance("model", model, ScrubModel)
+    face_stain = check_array("face_stain", face_stain, float)
     if face_stain.ndim != 1 or not np.all((face_stain >= 0) & (face_stain <= 1)):
         raise ValueError("face_stain must be a 1-D array in [0, 1]")
     hardness = np.ones_like(face_stain) if hardness is None else np.asarray(hardness, dtype=float)
