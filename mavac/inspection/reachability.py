@@ -13,8 +13,9 @@ exactly by rotating it about that axis, which fills the map ``n_rotations`` time
 a *prefilter*: the final decision for a guard is always collision-free IK.
 
 The map is cached on disk under a key made of the robot's name, a kinematic fingerprint (joint
-types and placements, limits, frame placement) and the parameters. It uses the joblib ``Memory``
-from :func:`mavac.cache.memory`, with the robot object left out of the hash: hashing a
+types and placements, limits, frame placement) and the parameters. It uses
+:func:`mavac.cache.verified_cache` (a joblib ``Memory`` whose entries are checked against their
+checksum before they are loaded), with the robot object left out of the hash: hashing a
 pinocchio model by pickling is slow and not stable, the fingerprint stands in for it.
 """
 
@@ -26,14 +27,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cache import memory
+from ..cache import verified_cache
 from ..geometry.transforms import points_in_frame, vectors_in_frame
 from ..params import ReachabilityMapParams
 from ..robots.kinematics import fk
 from ..tolerances import COUNT_SLACK, PARALLEL_TOL
-from ..validate import check_points
+from ..validate import check_points, check_size
 from ..vision.camera import OPTICAL_AXIS
 from .nos import sphere_directions
+
+
+#: Cells (voxels x directions, one byte each) a map may have: 1 GB, ~100 times the default
+#: UR10 map (5 cm voxels, 50 directions); a tiny voxel size would otherwise exhaust memory.
+MAX_MAP_CELLS = 1_000_000_000
 
 
 @dataclass(frozen=True)
@@ -201,6 +207,7 @@ def _build(robot, key: str, frame: str, params: ReachabilityMapParams, axis_colu
     shape = (np.ceil((hi_b - origin) / vs).astype(np.int64) + 1)
     dirs = sphere_directions(params.n_directions)
     n_cells = int(np.prod(shape)) * len(dirs)
+    check_size("voxel_size", vs, n_cells, MAX_MAP_CELLS, "map cells (voxels x directions)")
     hit = np.zeros(n_cells, dtype=bool)
     # random phase per sample so the copies do not line up on the same azimuths
     phase = rng.uniform(0.0, 2.0 * math.pi / n_rot, size=len(pos))
@@ -259,6 +266,6 @@ def reachability_map(robot, params: ReachabilityMapParams | None = None, *, fram
     if axis_column not in (0, 1, 2):
         raise ValueError(f"axis_column must be 0, 1 or 2, got {axis_column}")
     key = robot_fingerprint(robot, frame)
-    build = memory().cache(_build, ignore=["robot"]) if cache else _build
+    build = verified_cache(_build, ignore=["robot"]) if cache else _build
     out = build(robot, key, frame, params, axis_column)
     return ReachabilityMap(robot.name, frame, out["origin"], out["voxel_size"], out["directions"], out["reachable"])

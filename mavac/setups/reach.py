@@ -40,7 +40,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..cache import memory
+from ..cache import verified_cache
 from ..geometry.transforms import se2_matrices
 from ..parallel import map_trials
 from ..params import ReachParams, SetupSpaceParams
@@ -48,7 +48,7 @@ from ..robots.collision import CollisionChecker
 from ..robots.kinematics import ik_axis, puma_dh_constants
 from ..robots.models import load_robot
 from ..tolerances import SETUP_KEY_QUANTUM, TARGET_DECIMALS
-from ..validate import check_int, check_points
+from ..validate import check_instance, check_int, check_points
 
 
 # ---------------------------------------------------------------- targets and placement
@@ -131,6 +131,7 @@ def base_T_part(setups, space: SetupSpaceParams) -> np.ndarray:
     (k, 4, 4) float: ``Trans(origin_x + x, origin_y + y, table_z) @ Rz(alpha)``.
     """
     s = check_points("setups", setups, 3)
+    check_instance("space", space, SetupSpaceParams)
     T = se2_matrices(np.column_stack([space.origin_x + s[:, 0], space.origin_y + s[:, 1], s[:, 2]]))
     T[:, 2, 3] = space.table_z
     return T
@@ -346,7 +347,7 @@ def cached_reach_sweep(robot_name: str, positions, axes, patch_targets, setups, 
 
 @functools.lru_cache(maxsize=1)
 def _sweep_cache():
-    return memory().cache(_reach_sweep_by_name, ignore=["n_jobs"])
+    return verified_cache(_reach_sweep_by_name, ignore=["n_jobs"])
 
 
 def _reach_sweep_by_name(robot_name, positions, axes, patch_targets, setups, space, params, n_jobs):
