@@ -32,3 +32,39 @@ def test_interrupted_write_keeps_previous_version(tmp_path):
 def test_written_files_get_normal_permissions(tmp_path):
     path = write_json({"v": 1}, tmp_path / "p.json")
     assert path.stat().st_mode & 0o644 == 0o644
+
+
+@pytest.mark.parametrize("sig", ["SIGKILL", "SIGTERM"])
+def test_killed_writer_leaves_its_temporary_in_the_temp_folder_until_the_next_write(tmp_path, sig):
+    import signal
+
+    from _children import HALF_WRITTEN_CSV, end, start, wait_line
+    from mavac.io import TEMP_DIR
+
+    target = tmp_path / "t.csv"
+    proc = start(HALF_WRITTEN_CSV, target)
+    wait_line(proc, "writing")
+    proc.send_signal(getattr(signal, sig))
+    assert proc.wait(timeout=30) == -getattr(signal, sig)
+    end(proc)
+    # nothing half-written at the target or hidden beside it: one temporary, in the temp folder
+    assert [p.name for p in tmp_path.iterdir()] == [TEMP_DIR]
+    assert len(list((tmp_path / TEMP_DIR).iterdir())) == 1
+    df = pd.DataFrame({"a": [1], "b": [2]})
+    write_csv(df, target)
+    pd.testing.assert_frame_equal(pd.read_csv(target), df)
+    assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]  # stale temporary and folder gone
+
+
+def test_a_live_writers_temporary_is_not_cleaned(tmp_path):
+    from _children import HALF_WRITTEN_CSV, end, start, wait_line
+    from mavac.io import TEMP_DIR
+
+    proc = start(HALF_WRITTEN_CSV, tmp_path / "slow.csv")
+    try:
+        wait_line(proc, "writing")
+        write_csv(pd.DataFrame({"a": [1]}), tmp_path / "other.csv")
+        assert len(list((tmp_path / TEMP_DIR).iterdir())) == 1  # still being written
+    finally:
+        end(proc)
+    assert not (tmp_path / "slow.csv").exists()

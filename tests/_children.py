@@ -1,0 +1,80 @@
+"""Child processes that tests signal or kill in the middle of their work (shared by the tests
+of mavac.io, the meshcat scene and the bad-input matrix)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+
+# Writes half a CSV through mavac.io.write_csv (target: argv[1]), says "writing", sleeps.
+HALF_WRITTEN_CSV = """
+import sys, time
+from mavac.io import write_csv
+
+class HalfWritten:
+    def to_csv(self, path, **kwargs):
+        with open(path, "w") as f:
+            f.write("a,b\\n1,")
+            f.flush()
+            print("writing", flush=True)
+            time.sleep(120)
+
+write_csv(HalfWritten(), sys.argv[1])
+"""
+
+# Opens a meshcat scene, prints "server <pid>", then waits in short sleeps (a signal that
+# another thread takes is acted on at once). SIGINT raises KeyboardInterrupt even when the
+# child inherits it ignored, as background jobs do.
+IN_MESHCAT_SCENE = """
+import signal, time
+from mavac.viz.meshcat_scene import scene
+
+signal.signal(signal.SIGINT, signal.default_int_handler)
+with scene() as vis:
+    print("server", vis.window.server_proc.pid, flush=True)
+    for _ in range(1200):
+        time.sleep(0.1)
+"""
+
+
+def start(code: str, *args) -> subprocess.Popen:
+    """``python -c code args`` with its stdout readable as text."""
+    return subprocess.Popen([sys.executable, "-c", code, *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
+
+
+def wait_line(proc: subprocess.Popen, prefix: str) -> str:
+    """The first line of the child's stdout that starts with ``prefix``."""
+    line = ""
+    while not line.startswith(prefix):
+        line = proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f"child ended before printing {prefix!r}")
+    return line
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def gone_within(pid: int, seconds: float) -> bool:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        if not alive(pid):
+            return True
+        time.sleep(0.1)
+    return False
+
+
+def end(proc: subprocess.Popen) -> None:
+    """Kill the child if it still runs and release its pipe."""
+    if proc.poll() is None:
+        proc.kill()
+    proc.wait(timeout=30)
+    proc.stdout.close()
