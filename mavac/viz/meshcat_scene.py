@@ -1,17 +1,21 @@
 """meshcat scenes of machines, parts and robots, exported as self-contained static HTML.
 
-``meshcat.Visualizer()`` starts a server subprocess; :func:`scene` always terminates it
-(``Visualizer.close`` is broken in meshcat 0.3.2: its window has no ``close``), so no test
-or notebook leaves a server running.
+``meshcat.Visualizer()`` starts a server subprocess in its own session (so no signal to our
+process group reaches it); :func:`scene` always terminates it (``Visualizer.close`` is broken
+in meshcat 0.3.2: its window has no ``close``), so no test or notebook leaves a server running:
+on an error, on Ctrl-C (SIGINT) and on SIGTERM (what ``kill`` and ``timeout`` send).
 """
 
 from __future__ import annotations
 
 import contextlib
+import signal
 import subprocess
+import threading
 
 import numpy as np
 
+from ..geometry.transforms import check_transform
 from ..io import write_text
 
 
@@ -21,15 +25,47 @@ def _rgb_int(color) -> int:
 
 
 @contextlib.contextmanager
+def sigterm_as_interrupt():
+    """Inside the block SIGTERM raises ``KeyboardInterrupt``, as SIGINT does, so ``finally``
+    clauses run (the default action of SIGTERM ends the process at once and runs none).
+
+    On leaving the block the previous handler is restored and a SIGTERM that arrived is sent
+    again to it, so the process still ends as it was asked to (with the default handler: by
+    SIGTERM) once the cleanup is done. Only the main thread can handle signals: elsewhere, or
+    when SIGTERM is ignored, the block runs unchanged.
+    """
+    previous = signal.getsignal(signal.SIGTERM)
+    if threading.current_thread() is not threading.main_thread() or previous in (signal.SIG_IGN, None):
+        yield
+        return
+    received = []
+
+    def interrupt(signum, frame):
+        received.append(signum)
+        if len(received) == 1:  # a second SIGTERM must not interrupt the cleanup
+            raise KeyboardInterrupt("SIGTERM")
+
+    signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if received:
+            signal.raise_signal(signal.SIGTERM)
+
+
+@contextlib.contextmanager
 def scene():
-    """A fresh meshcat visualizer whose server is shut down on exit, even on error."""
+    """A fresh meshcat visualizer whose server is shut down on exit: on error, SIGINT and
+    SIGTERM too (:func:`sigterm_as_interrupt`)."""
     import meshcat
 
-    vis = meshcat.Visualizer()
-    try:
-        yield vis
-    finally:
-        shutdown(vis)
+    with sigterm_as_interrupt():
+        vis = meshcat.Visualizer()
+        try:
+            yield vis
+        finally:
+            shutdown(vis)
 
 
 def shutdown(vis) -> None:
@@ -55,7 +91,7 @@ def add_mesh(vis, name: str, mesh, color=(0.7, 0.7, 0.7), opacity: float = 1.0, 
     material = g.MeshLambertMaterial(color=_rgb_int(color), opacity=opacity, transparent=opacity < 1.0)
     vis[name].set_object(geom, material)
     if world_T_mesh is not None:
-        vis[name].set_transform(np.asarray(world_T_mesh, float))
+        vis[name].set_transform(check_transform("world_T_mesh", world_T_mesh))
 
 
 def add_points(vis, name: str, points, colors=None, size: float = 0.01) -> None:
@@ -85,7 +121,7 @@ def add_triad(vis, name: str, world_T_frame, length: float = 0.1) -> None:
     import meshcat.geometry as g
 
     vis[name].set_object(g.triad(length))
-    vis[name].set_transform(np.asarray(world_T_frame, float))
+    vis[name].set_transform(check_transform("world_T_frame", world_T_frame))
 
 
 def add_robot(vis, name: str, robot, q, world_T_base=None, geometry: str = "collision") -> None:
@@ -105,7 +141,7 @@ def add_robot(vis, name: str, robot, q, world_T_base=None, geometry: str = "coll
     viz.loadViewerModel(rootNodeName=name)
     viz.display(np.asarray(q, float))
     if world_T_base is not None:
-        vis[name].set_transform(np.asarray(world_T_base, float))
+        vis[name].set_transform(check_transform("world_T_base", world_T_base))
 
 
 def save_html(vis, path):

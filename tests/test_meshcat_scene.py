@@ -1,0 +1,33 @@
+"""A process interrupted inside a meshcat scene does not leave the meshcat server running."""
+
+import os
+import signal
+
+import pytest
+from _children import IN_MESHCAT_SCENE, alive, end, gone_within, start, wait_line
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_signal_inside_scene_ends_the_server(sig):
+    proc = start(IN_MESHCAT_SCENE)
+    server = None
+    try:
+        server = int(wait_line(proc, "server").split()[-1])
+        assert alive(server)
+        proc.send_signal(sig)
+        code = proc.wait(timeout=60)
+        assert gone_within(server, 10), "meshcat server left running"
+        assert code == -sig  # once the server is down the process still ends by the signal
+    finally:
+        end(proc)
+        if server is not None and alive(server):
+            os.kill(server, signal.SIGKILL)  # the orphan this test found, not to leave it behind
+
+
+def test_handler_is_restored_after_the_scene():
+    from mavac.viz.meshcat_scene import sigterm_as_interrupt
+
+    before = signal.getsignal(signal.SIGTERM)
+    with sigterm_as_interrupt():
+        assert signal.getsignal(signal.SIGTERM) is not before
+    assert signal.getsignal(signal.SIGTERM) is before
