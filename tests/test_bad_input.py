@@ -32,6 +32,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import traceback
 import types
 import typing
 import warnings
@@ -222,7 +223,9 @@ def _files_after_killed_write() -> list:
 
 def _cases_wrong():
     from mavac.geometry import transforms as TR
-    from mavac.vision import stain
+    from mavac.inspection import coverage, guards
+    from mavac.scrubbing import lissajous, toolpath
+    from mavac.vision import camera, icp, stain
 
     image = lambda: _stain_image()[0]  # noqa: E731
     return [
@@ -238,34 +241,36 @@ def _cases_wrong():
                ValueError, r"image.*dtype bool"),
         answer("wrong", "cache-flipped-bytes-recomputed", _reachability_map_after_flip, bool),
         refuse("wrong", "toolpath-scaled-x2-world_T_part", lambda: _toolpath(SCALED), ValueError, "world_T_part"),
-        refuse("wrong", "reachable_from_robot-scaled", lambda: __import__(
-            "mavac.scrubbing.toolpath", fromlist=["x"]).reachable_from_robot(None, world_T_base=SCALED),
-            ValueError, "world_T_base"),
+        refuse("wrong", "reachable_from_robot-scaled",
+               lambda: toolpath.reachable_from_robot(None, world_T_base=SCALED), ValueError, "world_T_base"),
         refuse("wrong", "transform_points-scaled", lambda: TR.transform_points(SCALED, [[1, 2, 3]]),
                ValueError, "a_T_b"),
         refuse("wrong", "points_in_frame-reflection", lambda: TR.points_in_frame(REFLECTION, [[1, 2, 3]]),
                ValueError, "a_T_b"),
         refuse("wrong", "compose-shear", lambda: TR.compose(np.eye(4), SHEAR), ValueError, r"transforms\[1\]"),
-        refuse("wrong", "camera_configurations-scaled", lambda: __import__(
-            "mavac.inspection.guards", fromlist=["x"]).camera_configurations(
+        refuse("wrong", "camera_configurations-scaled", lambda: guards.camera_configurations(
             _ur10(), None, SCALED, np.zeros((1, 3)), [[0, 0, 1]], np.random.default_rng(0)),
             ValueError, "world_T_base"),
-        refuse("wrong", "fov_mask-scaled", lambda: __import__("mavac.vision.camera", fromlist=["x"]).fov_mask(
-            [[1, 0, 0]], SCALED, P.CameraParams()), ValueError, "world_T_camera"),
-        refuse("wrong", "rotation_error-not-a-rotation", lambda: __import__(
-            "mavac.vision.icp", fromlist=["x"]).rotation_error(2 * np.eye(3), np.eye(3)), ValueError, "R_a"),
+        refuse("wrong", "fov_mask-scaled", lambda: camera.fov_mask([[1, 0, 0]], SCALED, P.CameraParams()),
+               ValueError, "world_T_camera"),
+        refuse("wrong", "rotation_error-not-a-rotation", lambda: icp.rotation_error(2 * np.eye(3), np.eye(3)),
+               ValueError, "R_a"),
         refuse("wrong", "dense_optimum-nan-model", _dense_optimum_nan, ValueError, "experiment_mean"),
-        refuse("wrong", "coverage-nan-visibility", lambda: __import__(
-            "mavac.inspection.coverage", fromlist=["x"]).coverage_overlap([[np.nan, 1.0]]), ValueError, "visible"),
+        refuse("wrong", "overlay_path-scaled-frames",
+               lambda: lissajous.overlay_path([[0, 0, 0], [0.1, 0, 0]], [SCALED, SCALED]), ValueError, "frames"),
+        refuse("wrong", "cleaning_performance-nan-mask", lambda: stain.cleaning_performance(
+            np.full((4, 4), np.nan), np.zeros((4, 4))), ValueError, "mask_before"),
+        refuse("wrong", "coverage-nan-visibility", lambda: coverage.coverage_overlap([[np.nan, 1.0]]), ValueError,
+               "visible"),
     ]
 
 
 def _cases_dependency():
-    from mavac.geometry import machines
+    from mavac.geometry import machines, transforms
     from mavac.geometry.surface import sample_surface
     from mavac.planning.greedy import greedy_select
     from mavac.planning.setcover import solve_setup_cover
-    from mavac.vision import stain
+    from mavac.vision import camera, icp, stain
     from mavac.vision.visibility import VisibilityScene
 
     empty = np.zeros((0, 0, 3), np.uint8)
@@ -290,26 +295,31 @@ def _cases_dependency():
         refuse("dependency", "setcover-ragged-cover", lambda: solve_setup_cover(RAGGED, [1.0, 1.0]), ValueError,
                "cover"),
         refuse("dependency", "greedy-ragged-access", lambda: greedy_select(RAGGED, 0.1), ValueError, "access"),
-        refuse("dependency", "fov-ragged-points", lambda: __import__("mavac.vision.camera", fromlist=["x"]).fov_masks(
-            RAGGED, np.eye(4), P.CameraParams()), ValueError, "points_world"),
-        refuse("dependency", "transform-ragged", lambda: __import__(
-            "mavac.geometry.transforms", fromlist=["x"]).check_transform("world_T_part", [[1, 0], [0]]),
-            ValueError, "world_T_part"),
-        refuse("dependency", "rotation_error-nan", lambda: __import__("mavac.vision.icp", fromlist=["x"]).rotation_error(
-            np.full((3, 3), np.nan), np.eye(3)), ValueError, "R_a"),
+        refuse("dependency", "fov-ragged-points", lambda: camera.fov_masks(RAGGED, np.eye(4), P.CameraParams()),
+               ValueError, "points_world"),
+        refuse("dependency", "transform-ragged", lambda: transforms.check_transform("world_T_part", [[1, 0], [0]]),
+               ValueError, "world_T_part"),
+        refuse("dependency", "rotation_error-nan", lambda: icp.rotation_error(np.full((3, 3), np.nan), np.eye(3)),
+               ValueError, "R_a"),
     ]
 
 
 def _cases_unnamed():
+    import pandas as pd
+
     from mavac.geometry.machines import dust_heaps, load_machine
     from mavac.geometry.mesh import load_mesh
     from mavac.geometry.surface import sample_surface
     from mavac.geometry.transforms import rz
+    from mavac.inspection import coverage
     from mavac.io import write_csv
+    from mavac.robots import kinematics
+    from mavac.scrubbing import gpr
     from mavac.scrubbing.execution import cover_from_patches
     from mavac.scrubbing.lissajous import lissajous_force
     from mavac.setups.reach import base_T_part
-    from mavac.vision import stain
+    from mavac.sim import wear
+    from mavac.vision import camera, icp, stain
 
     box = trimesh.creation.box()
     return [
@@ -318,8 +328,8 @@ def _cases_unnamed():
         refuse("unnamed", "SpotParams-ring_distances-float", lambda: P.SpotParams(ring_distances=0.5), TypeError,
                "ring_distances"),
         refuse("unnamed", "gpr-None-result", lambda: _learn(None), TypeError, "experiment"),
-        refuse("unnamed", "gpr-experiment-not-callable", lambda: __import__(
-            "mavac.scrubbing.gpr", fromlist=["x"]).learn_parameters(3, _gpr_params()), TypeError, "experiment"),
+        refuse("unnamed", "gpr-experiment-not-callable", lambda: gpr.learn_parameters(3, _gpr_params()), TypeError,
+               "experiment"),
         refuse("unnamed", "sample_surface-spacing-str", lambda: sample_surface(box, "0.1"), TypeError, "spacing"),
         refuse("unnamed", "dust_heaps-spacing-str", lambda: dust_heaps(load_machine("test_bench"), spacing="0.1"),
                TypeError, "spacing"),
@@ -329,21 +339,30 @@ def _cases_unnamed():
         refuse("unnamed", "passes-n_clusters-None", lambda: stain.passes_from_image(
             _stain_image()[0], n_clusters=None), TypeError, "n_clusters"),
         refuse("unnamed", "rz-str", lambda: rz("a"), ValueError, "theta"),
-        refuse("unnamed", "cover_counts-ragged", lambda: __import__(
-            "mavac.inspection.coverage", fromlist=["x"]).cover_counts(RAGGED), ValueError, "visible"),
+        refuse("unnamed", "cover_counts-ragged", lambda: coverage.cover_counts(RAGGED), ValueError, "visible"),
         refuse("unnamed", "cover_from_patches-n_patches-str", lambda: cover_from_patches([[0]], "3"), TypeError,
                "n_patches"),
         refuse("unnamed", "load_mesh-path-None", lambda: load_mesh(None), TypeError, "path"),
-        refuse("unnamed", "write_csv-path-None", lambda: write_csv(__import__("pandas").DataFrame({"a": [1]}), None),
+        refuse("unnamed", "write_csv-path-None", lambda: write_csv(pd.DataFrame({"a": [1]}), None),
                TypeError, "path"),
         refuse("unnamed", "write_csv-not-a-frame", lambda: write_csv([1, 2], Path(tempfile.gettempdir()) / "x.csv"),
                TypeError, "df"),
         refuse("unnamed", "lissajous-params-None", lambda: lissajous_force([0.1], None), TypeError, "params"),
         refuse("unnamed", "base_T_part-space-None", lambda: base_T_part([[0, 0, 0]], None), TypeError, "space"),
-        refuse("unnamed", "fov-camera-None", lambda: __import__("mavac.vision.camera", fromlist=["x"]).fov_masks(
-            [[1, 0, 0]], np.eye(4), None), TypeError, "camera"),
-        refuse("unnamed", "scrub_faces-params-None", lambda: __import__("mavac.sim.wear", fromlist=["x"]).scrub_faces(
-            [0.5], None), TypeError, "params"),
+        refuse("unnamed", "fov-camera-None", lambda: camera.fov_masks([[1, 0, 0]], np.eye(4), None), TypeError,
+               "camera"),
+        refuse("unnamed", "fk-robot-None", lambda: kinematics.fk(None, np.zeros(6)), TypeError, "robot"),
+        refuse("unnamed", "fk-q-str", lambda: kinematics.fk(_ur10(), ["a"] * _ur10().nq), ValueError, r"\bq\b"),
+        refuse("unnamed", "register_part-mesh-None", lambda: icp.register_part(
+            None, np.random.default_rng(0).random((10, 3)), np.eye(4)), TypeError, "mesh"),
+        refuse("unnamed", "partial_noisy_cloud-rng-None",
+               lambda: icp.partial_noisy_cloud(box, np.eye(4), [0, 0, 1], 0.0, 10, None), TypeError, "rng"),
+        refuse("unnamed", "dust_heaps-machine-None", lambda: dust_heaps(None), TypeError, "machine"),
+        refuse("unnamed", "render_stain_image-mesh-None", lambda: stain.render_stain_image(None, [0.5], (0, 0, -1)),
+               TypeError, "mesh"),
+        refuse("unnamed", "cleaning_performance-ragged", lambda: stain.cleaning_performance(RAGGED, RAGGED),
+               ValueError, "mask_before"),
+        refuse("unnamed", "scrub_faces-params-None", lambda: wear.scrub_faces([0.5], None), TypeError, "params"),
     ]
 
 
@@ -380,6 +399,7 @@ def _cases_accepted():
 
 def _cases_hang():
     from mavac.inspection.reachability import reachability_map
+    from mavac.scrubbing import lissajous, toolpath
     from mavac.setups.sampling import uniform_setups
     from mavac.vision.stain import face_index_image
 
@@ -395,6 +415,12 @@ def _cases_hang():
             P.SetupSpaceParams(res_x=1e-5, res_y=1e-5)), ValueError, "resolution"),
         refuse("hang", "reachability_map-tiny-voxel", lambda: reachability_map(_ur10(), P.ReachabilityMapParams(
             voxel_size=1e-4, n_samples=100, n_rotations=1), cache=False), ValueError, "voxel_size"),
+        refuse("hang", "resample_polyline-tiny-spacing",
+               lambda: toolpath.resample_polyline(np.array([[0, 0, 0], [1.0, 0, 0]]), 1e-9), ValueError, "spacing"),
+        refuse("hang", "slice_heights-tiny-spacing", lambda: toolpath.slice_heights(np.array([0, 1.0]), 1e-9),
+               ValueError, "spacing"),
+        refuse("hang", "overlay_path-tiny-dt", lambda: lissajous.overlay_path(
+            [[0, 0, 0], [1.0, 0, 0]], [[0, 0, 1], [0, 0, 1]], dt=1e-9), ValueError, r"\bdt\b"),
         refuse("hang", "gpr-huge-n_candidates", lambda: P.GPRParams(n_candidates=10**8), ValueError, "n_candidates"),
     ]
 
@@ -494,7 +520,7 @@ def outcome(case: Case) -> str:
     except Exception as exc:  # noqa: BLE001 -- classifying every failure is the point
         if case.error is not None and isinstance(exc, case.error) and re.search(case.names, str(exc)):
             return "ok"
-        frames = [f.filename for f in __import__("traceback").extract_tb(exc.__traceback__)]
+        frames = [f.filename for f in traceback.extract_tb(exc.__traceback__)]
         in_dependency = bool(frames) and not Path(frames[-1]).resolve().is_relative_to(MAVAC_DIR) \
             and Path(frames[-1]).resolve() != Path(__file__).resolve()
         foreign = type(exc).__module__ not in ("builtins",) and not type(exc).__module__.startswith("mavac")

@@ -24,7 +24,7 @@ import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from ..tolerances import FLOOR_NORMAL_Z, FLOOR_TOLERANCE
-from ..validate import check_points, check_positive, check_range
+from ..validate import check_instance, check_points, check_positive, check_range
 from .mesh import check_mesh
 from .surface import sample_surface
 
@@ -251,7 +251,7 @@ def _floor_faces(mesh: trimesh.Trimesh) -> np.ndarray:
 
 def exposed_area(machine: Machine) -> float:
     """Area (m^2) of every face except the downward faces standing on the floor."""
-    mesh = machine.mesh
+    mesh = check_instance("machine", machine, Machine).mesh
     return float(np.asarray(mesh.area_faces)[~_floor_faces(mesh)].sum())
 
 
@@ -280,6 +280,7 @@ def dust_heaps(machine: Machine, *, spacing: float = 0.10, seed: int = 0,
     -------
     (n, 3) float, metres: heap positions on the machine surface.
     """
+    check_instance("machine", machine, Machine)
     check_positive("spacing", spacing)
     check_range("min_normal_z", min_normal_z, 0.0, 1.0)
     mesh = machine.mesh

@@ -72,15 +72,25 @@ def check_transform(name: str, transform) -> np.ndarray:
     return check_transforms(name, T)[0]
 
 
+def check_rotations(name: str, rotations) -> np.ndarray:
+    """Rotation matrices (orthonormal, determinant +1), ``(3, 3)`` or ``(m, 3, 3)``, checked
+    as the rotation parts of poses by :func:`check_transforms`; returns them as float, shape
+    kept."""
+    R = check_array(name, rotations, float)
+    if R.shape[-2:] != (3, 3) or R.ndim not in (2, 3):
+        raise ValueError(f"{name} must have shape (3, 3) or (m, 3, 3), got {R.shape}")
+    T = np.tile(np.eye(4), (len(R.reshape(-1, 3, 3)), 1, 1))
+    T[:, :3, :3] = R.reshape(-1, 3, 3)
+    check_transforms(name, T)
+    return R
+
+
 def check_rotation(name: str, rotation) -> np.ndarray:
-    """A (3, 3) rotation matrix (orthonormal, determinant +1), checked as the rotation part of
-    a pose by :func:`check_transforms`; returns it as float."""
-    R = check_array(name, rotation, float)
+    """:func:`check_rotations` for exactly one (3, 3) rotation."""
+    R = check_rotations(name, rotation)
     if R.shape != (3, 3):
         raise ValueError(f"{name} must have shape (3, 3), got {R.shape}")
-    T = np.eye(4)
-    T[:3, :3] = R
-    return check_transforms(name, T)[0, :3, :3]
+    return R
 
 
 def rz(theta) -> np.ndarray:

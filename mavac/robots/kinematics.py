@@ -22,7 +22,7 @@ import numpy as np
 
 from ..geometry.transforms import check_transforms
 from ..tolerances import IK_POSITION_TOL, IK_ROTATION_TOL
-from ..validate import check_int, check_points, check_positive
+from ..validate import ParameterTypeError, check_array, check_int, check_points, check_positive
 
 _AXES = {"RX": (1.0, 0.0, 0.0), "RY": (0.0, 1.0, 0.0), "RZ": (0.0, 0.0, 1.0)}
 _TWO_PI = 2.0 * np.pi
@@ -54,9 +54,17 @@ class IKResult:
 # input checks
 
 
+def _check_robot(robot) -> None:
+    # duck-typed: models.py imports this module, so RobotModel cannot be imported here
+    if not (hasattr(robot, "model") and hasattr(robot, "tool_frame")):
+        raise ParameterTypeError(f"robot must be a mavac RobotModel (mavac.robots.models.load_robot), "
+                                 f"got {type(robot).__name__}")
+
+
 def _check_q(robot, q, name: str = "q") -> tuple[np.ndarray, bool]:
     """``q`` as (n, nq) plus whether a single (nq,) configuration was given."""
-    a = np.asarray(q, dtype=float)
+    _check_robot(robot)
+    a = check_array(name, q, float)
     single = a.ndim == 1
     if single:
         a = a[None, :]
@@ -68,6 +76,7 @@ def _check_q(robot, q, name: str = "q") -> tuple[np.ndarray, bool]:
 
 
 def _check_frame(robot, frame) -> str:
+    _check_robot(robot)
     frame = robot.tool_frame if frame is None else frame
     if not isinstance(frame, str) or not robot.model.existFrame(frame):
         names = [f.name for f in robot.model.frames]

@@ -19,8 +19,13 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
+from ..geometry.transforms import check_rotations, check_transforms
 from ..params import LissajousParams
-from ..validate import check_array, check_instance, check_points, check_positive
+from ..validate import check_array, check_instance, check_points, check_positive, check_size
+
+#: Time samples an overlay may have: ~2,000 times a paper-scale pass (~20 s at 240 Hz); a tiny
+#: ``dt`` would otherwise exhaust memory.
+MAX_SAMPLES = 10_000_000
 
 
 class Overlay(NamedTuple):
@@ -114,11 +119,13 @@ def overlay_path(path, frames, params: LissajousParams = LissajousParams(), *, s
     dt = 1.0 / (40.0 * params.f_x) if dt is None else dt
     check_positive("dt", dt)
 
-    frames = np.asarray(frames, dtype=float)
+    frames = check_array("frames", frames, float)
     if frames.shape == (len(path), 3):
         rotations = _frames_from_normals(path, check_points("frames", frames, 3))
-    elif frames.shape in ((len(path), 3, 3), (len(path), 4, 4)):
-        rotations = frames[:, :3, :3]
+    elif frames.shape == (len(path), 4, 4):
+        rotations = check_transforms("frames", frames)[:, :3, :3]
+    elif frames.shape == (len(path), 3, 3):
+        rotations = check_rotations("frames", frames)
     else:
         raise ValueError(f"frames must be (n, 3) normals or (n, 3, 3)/(n, 4, 4) tool frames for "
                          f"n = {len(path)} waypoints, got shape {frames.shape}")
@@ -133,6 +140,7 @@ def overlay_path(path, frames, params: LissajousParams = LissajousParams(), *, s
     s, path, rotations = s[keep], path[keep], rotations[keep]
 
     duration = s[-1] / speed
+    check_size("dt", dt, duration / dt, MAX_SAMPLES, "time samples")
     t = np.arange(0.0, duration + 0.5 * dt, dt)
     t[-1] = min(t[-1], duration)
     s_t = np.clip(t * speed, 0.0, s[-1])

@@ -49,7 +49,7 @@ from ..params import SetupSpaceParams, ToolpathParams
 from ..robots.kinematics import ik_axis
 from ..setups.reach import base_T_part
 from ..tolerances import COUNT_SLACK
-from ..validate import check_indices, check_instance, check_int, check_points, check_size
+from ..validate import check_indices, check_instance, check_int, check_points, check_positive, check_size
 
 # Dense samples per waypoint interval when a spline is evaluated (length, coverage, output).
 _SPLINE_SUBDIVISION = 4
@@ -275,6 +275,7 @@ def slice_heights(projections: np.ndarray, spacing: float) -> np.ndarray:
     is within ``spacing / 2`` of a plane when the extent is a multiple of the spacing.
     """
     lo, hi = float(np.min(projections)), float(np.max(projections))
+    check_size("spacing", spacing, (hi - lo) / check_positive("spacing", spacing), MAX_PLANES, "cutting planes")
     n = max(1, int(np.ceil((hi - lo) / spacing - COUNT_SLACK)))
     return lo + 0.5 * ((hi - lo) - (n - 1) * spacing) + spacing * np.arange(n)
 
@@ -318,6 +319,7 @@ def resample_polyline(points: np.ndarray, spacing: float) -> np.ndarray:
     """Points at equal arc length (at most ``spacing`` apart) along a polyline, ends included."""
     seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(seg)])
+    check_size("spacing", spacing, s[-1] / check_positive("spacing", spacing), MAX_WAYPOINTS, "waypoints")
     n = max(2, int(np.ceil(s[-1] / spacing - COUNT_SLACK)) + 1)
     t = np.linspace(0.0, s[-1], n)
     return np.column_stack([np.interp(t, s, points[:, i]) for i in range(3)])

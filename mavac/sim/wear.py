@@ -40,6 +40,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import trimesh
 
+from ..geometry.mesh import check_mesh
 from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
 from ..validate import check_array, check_instance, check_int, check_points
 from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
@@ -274,8 +275,9 @@ class ScrubExperiment:
     _table: tuple | None = field(init=False, default=None, repr=False)
 
     def __post_init__(self):
-        self.face_stain = np.asarray(self.face_stain, dtype=float)
-        self.hardness = np.asarray(self.hardness, dtype=float)
+        check_mesh("mesh", self.mesh)
+        self.face_stain = check_array("face_stain", self.face_stain, float)
+        self.hardness = check_array("hardness", self.hardness, float)
         stained = np.flatnonzero(self.face_stain > 0)
         if stained.size == 0:
             raise ValueError("face_stain has no stained face")

@@ -20,10 +20,11 @@ import trimesh
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
+from ..geometry.mesh import check_mesh
 from ..geometry.transforms import check_rotation, check_transform
 from ..parallel import map_trials
 from ..params import ICPParams
-from ..validate import check_int, check_nonnegative, check_points, check_positive
+from ..validate import check_instance, check_int, check_nonnegative, check_points, check_positive
 from .visibility import raycast_visible
 
 
@@ -45,6 +46,7 @@ def model_samples(mesh: trimesh.Trimesh, n_points: int, seed: int = 0) -> tuple[
     points : (n, 3) float, metres
     normals : (n, 3) float, unit
     """
+    check_mesh("mesh", mesh)
     points, faces = trimesh.sample.sample_surface(mesh, check_int("n_points", n_points, lo=1), seed=seed)
     return np.asarray(points), np.asarray(mesh.face_normals[faces])
 
@@ -81,6 +83,7 @@ def register_part(cad_mesh: trimesh.Trimesh, cloud_points, init_T, params: ICPPa
     if len(cloud) < 3:
         raise ValueError(f"cloud_points needs at least 3 points, got {len(cloud)}")
     T0 = check_transform("init_T", init_T)
+    check_instance("params", params, ICPParams)
     model, normals = model_samples(cad_mesh, params.model_points, seed)
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(cloud))
     target = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(model))
@@ -128,7 +131,8 @@ def partial_noisy_cloud(mesh: trimesh.Trimesh, world_T_part, view_dir, noise_std
     d = d / np.linalg.norm(d)
     check_nonnegative("noise_std", noise_std)
     n_points = check_int("n_points", n_points, lo=1)
-    world = mesh.copy()
+    check_instance("rng", rng, np.random.Generator)
+    world = check_mesh("mesh", mesh).copy()
     world.apply_transform(T)
     dist = 3.0 * float(np.linalg.norm(world.extents)) if distance is None else check_positive("distance", distance)
     sensor = world.bounds.mean(axis=0) - dist * d

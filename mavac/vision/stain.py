@@ -22,9 +22,10 @@ import numpy as np
 import trimesh
 from sklearn.cluster import KMeans
 
+from ..geometry.mesh import check_mesh
 from ..parallel import single_thread
-from ..validate import (check_array, check_indices, check_int, check_nonnegative, check_points, check_range,
-                        check_size)
+from ..validate import (check_array, check_bool_array, check_indices, check_int, check_nonnegative,
+                        check_points, check_range, check_size)
 
 
 #: Pixels a rendered image may have: 4096 x 4096, 1000 times the 128 x 128 images we measure
@@ -67,6 +68,7 @@ def view_of_faces(mesh: trimesh.Trimesh, faces=None, *, direction=None, margin: 
     margin : float
         Relative margin around the projected bounding box.
     """
+    check_mesh("mesh", mesh)
     faces = np.arange(len(mesh.faces)) if faces is None else check_indices("faces", faces, len(mesh.faces))
     if faces.size == 0:
         raise ValueError("faces must select at least one face to frame")
@@ -104,6 +106,7 @@ def face_index_image(mesh: trimesh.Trimesh, view, image_size=(96, 96)) -> np.nda
     -------
     (H, W) int
     """
+    check_mesh("mesh", mesh)
     view = view if isinstance(view, OrthoView) else view_of_faces(mesh, direction=view, margin=0.02)
     if np.shape(image_size) != (2,):
         raise ValueError(f"image_size must be a pair (H, W) of pixel counts, got {image_size!r}")
@@ -159,8 +162,8 @@ def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, *, image_size=(9
     -------
     (H, W, 3) uint8 RGB image.
     """
-    face_stain = np.asarray(face_stain, dtype=float)
-    if face_stain.shape != (len(mesh.faces),):
+    face_stain = check_array("face_stain", face_stain, float)
+    if face_stain.shape != (len(check_mesh("mesh", mesh).faces),):
         raise ValueError(f"face_stain must have shape ({len(mesh.faces)},), got {face_stain.shape}")
     if not np.all((face_stain >= 0) & (face_stain <= 1)):
         raise ValueError("face_stain must be in [0, 1]")
@@ -211,7 +214,7 @@ def check_image(name: str, image) -> np.ndarray:
 def _region(region_mask, shape) -> np.ndarray:
     if region_mask is None:
         return np.ones(shape, dtype=bool)
-    region = np.asarray(region_mask, dtype=bool)
+    region = check_bool_array("region_mask", region_mask)
     if region.shape != shape:
         raise ValueError(f"region_mask must have shape {shape}, got {region.shape}")
     return region
@@ -331,8 +334,8 @@ def cleaning_performance(mask_before, mask_after, region_mask=None) -> float:
     -------
     float -- in [-1, 1]; 0 when there is no stain (or an empty region).
     """
-    before = np.asarray(mask_before, dtype=bool)
-    after = np.asarray(mask_after, dtype=bool)
+    before = check_bool_array("mask_before", mask_before)
+    after = check_bool_array("mask_after", mask_after)
     if before.shape != after.shape or before.ndim != 2:
         raise ValueError(f"mask_before and mask_after must be (H, W) of the same shape, "
                          f"got {before.shape} and {after.shape}")
