@@ -90,6 +90,16 @@ def _read(path: Path) -> trimesh.Trimesh:
     return loaded
 
 
+def _colors(mesh: trimesh.Trimesh) -> dict:
+    """Per-vertex or per-face colours stored in the file (a stain can be painted on), if any."""
+    kind = getattr(mesh.visual, "kind", None)
+    if kind == "vertex":
+        return {"vertex_colors": np.asarray(mesh.visual.vertex_colors)}
+    if kind == "face":
+        return {"face_colors": np.asarray(mesh.visual.face_colors)}
+    return {}
+
+
 def _keep_majority_orientation(mesh: trimesh.Trimesh, before: np.ndarray) -> np.ndarray:
     """After ``fix_winding``: in each connected sheet whose faces were mostly flipped, flip the
     sheet back, so the author's orientation survives where most faces agreed with it.
@@ -221,7 +231,8 @@ def load_mesh(path, units: str | None = None, *, role: str | None = None) -> tri
     trimesh.Trimesh
         Repaired mesh in metres. ``mesh.metadata["mavac_repairs"]`` holds the repair counts
         (see :func:`repair_mesh`) and ``"watertight"``; ``mesh.metadata["mavac_units"]`` the
-        unit read and ``"mavac_scale"`` its metres per unit.
+        unit read and ``"mavac_scale"`` its metres per unit. Per-vertex or per-face colours in
+        the file are kept (``mesh.visual``), e.g. for :func:`mavac.geometry.stain_marking.faces_from_colors`.
 
     Raises
     ------
@@ -255,7 +266,7 @@ def load_mesh(path, units: str | None = None, *, role: str | None = None) -> tri
         raise ValueError(f"mesh in {str(path)!r} has {bad} vertices with NaN or infinite "
                          "coordinates; repair the file in the exporting tool")
     _check_size(path, float(np.ptp(vertices, axis=0).max()), scale, unit, role)
-    mesh = trimesh.Trimesh(vertices * scale, np.asarray(mesh.faces), process=False)
+    mesh = trimesh.Trimesh(vertices * scale, np.asarray(mesh.faces), process=False, **_colors(mesh))
     repairs = repair_mesh(mesh)
     if len(mesh.faces) == 0:
         raise ValueError(f"mesh in {str(path)!r} has only degenerate faces; export it again")
