@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+import warnings as _warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -19,6 +20,8 @@ from ..params import SetupPlanParams
 from .reach import CountingReach, PartReach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
 from ..planning.setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
+from ..geometry.stain_marking import oversized_patches
+from .diagnose import unreachable_causes, unreachable_message
 
 
 @dataclass
@@ -51,16 +54,21 @@ class SetupPlan:
     nondominated : int
         Candidates left after dominance elimination (the planner's input).
     certificate_cost : float or None
-        MILP optimum of the same instance.
+        MILP optimum of the same instance; None when there is no solution (or the MILP did
+        not run).
     certificate_gap : float or None
         ``(cost - certificate_cost) / certificate_cost``; 0 means the plan is proven optimal
-        over the candidates.
+        over the candidates; None without a certificate.
     status : str
         The planner's status ("optimal", "timed_out", "no_solution", "empty").
     uncoverable : (u,) int
         Patches no candidate setup reaches (not in the plan).
     seconds : float
         Wall time of the whole call.
+    uncoverable_causes : (u,) str
+        Likely cause for each uncoverable patch (:data:`mavac.setups.diagnose.CAUSES`).
+    warnings : list of str
+        What the user should know: unreachable share of the stain and why, oversized patches.
     """
 
     part_name: str
@@ -80,20 +88,25 @@ class SetupPlan:
     status: str
     uncoverable: np.ndarray
     seconds: float
+    uncoverable_causes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U18"))
+    warnings: list = field(default_factory=list)
 
     def summary(self) -> str:
         """A few lines a person can read."""
-        lines = [f"{self.part_name}: {len(self.setups)} setups, T = {self.cost:.1f} s "
-                 f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "
-                 f"status {self.status}, n_rfc {self.n_rfc}, {self.nondominated} non-dominated of "
-                 f"{self.candidates} candidates, {self.node_expansions} DFBnB nodes"]
-        if self.certificate_gap is not None:
+        if self.status == "no_solution":
+            lines = [f"{self.part_name}: NO SOLUTION: none of {self.candidates} candidate setups reaches any "
+                     f"stain patch (n_rfc {self.n_rfc}); no plan, no cost, no certificate"]
+        else:
+            lines = [f"{self.part_name}: {len(self.setups)} setups, T = {self.cost:.1f} s "
+                     f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "
+                     f"status {self.status}, n_rfc {self.n_rfc}, {self.nondominated} non-dominated of "
+                     f"{self.candidates} candidates, {self.node_expansions} DFBnB nodes"]
+        if self.certificate_gap is not None and self.certificate_cost is not None:
             lines.append(f"  MILP optimum {self.certificate_cost:.1f} s, gap {100 * self.certificate_gap:.2f} %")
         for j, (s, p) in enumerate(zip(self.setups, self.patches)):
             lines.append(f"  setup {j + 1}: x = {s[0]:.3f} m, y = {s[1]:.3f} m, "
                          f"alpha = {math.degrees(s[2]):.1f} deg, {len(p)} patches")
-        if len(self.uncoverable):
-            lines.append(f"  {len(self.uncoverable)} patches no setup reaches")
+        lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
 
@@ -137,6 +150,10 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
                          f"length, got {n}, {len(normals)}, {len(area)}, {len(passes)}")
     if n == 0:
         return _empty_plan(name, time.perf_counter() - t0)
+    notes = []
+    oversized = oversized_patches(area)
+    if oversized:
+        notes.append(oversized)
     if robot is None:
         from ..robots.models import puma560
 
@@ -155,7 +172,14 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
     if len(setups) == 0:
         plan = _empty_plan(name, 0.0)
         plan.n_rfc, plan.candidates, plan.status = reach.n_rfc, len(sampled.setups), "no_solution"
+        plan.certificate_cost = plan.certificate_gap = None
         plan.uncoverable = np.arange(n)
+        plan.uncoverable_causes, plan.warnings = _left_out(plan.uncoverable, vertices, normals, area, robot,
+                                                           params, mesh, notes)
+        across = float(np.ptp(vertices.reshape(-1, 3), axis=0).max())
+        plan.warnings.append(f"the stain spans {across:.3g} m; if the part is really much larger or smaller, "
+                             "it was read in the wrong units (load_mesh(path, units=...))")
+        _warn_all(plan.warnings)
         plan.seconds = time.perf_counter() - t0
         return plan
 
@@ -168,13 +192,30 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
         reachable.append(np.flatnonzero(cover[j]))
         patches.append(np.flatnonzero(cover[j] & ~done))
         done |= cover[j]
+    uncoverable = np.asarray(res.uncoverable, dtype=np.int64)
+    causes, notes = _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes)
+    _warn_all(notes)
     return SetupPlan(
         part_name=name, setups=setups[res.setups], patches=patches, reachable=reachable,
         step_costs=res.step_costs, cost=res.cost, setup_time_total=res.setup_time_total or 0.0,
         execution_time_total=res.execution_time_total or 0.0, node_expansions=res.node_expansions,
         n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
         certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
-        uncoverable=np.asarray(res.uncoverable, dtype=np.int64), seconds=time.perf_counter() - t0)
+        uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes)
+
+
+def _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes):
+    """Causes of the uncoverable patches and the warning list with the share left out."""
+    if len(uncoverable) == 0:
+        return np.zeros(0, dtype="<U18"), notes
+    causes = unreachable_causes(robot, vertices[uncoverable], normals[uncoverable], params.space, params.reach,
+                                part_mesh=mesh)
+    return causes, notes + [unreachable_message(causes, area[uncoverable], float(area.sum()), len(area))]
+
+
+def _warn_all(notes) -> None:
+    for note in notes:
+        _warnings.warn(note, stacklevel=3)
 
 
 def _empty_plan(name: str, seconds: float) -> SetupPlan:
