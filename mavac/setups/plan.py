@@ -91,6 +91,42 @@ class SetupPlan:
     uncoverable_causes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U18"))
     warnings: list = field(default_factory=list)
 
+    def to_dict(self, timings: bool = False) -> dict:
+        """Plain-JSON description: setups in order with their patches, costs, certificate, warnings.
+
+        Wall time is left out unless asked for, so the same seed gives the same file.
+        """
+        out = {
+            "part": self.part_name, "status": self.status,
+            "cost_s": float(self.cost), "setup_time_s": float(self.setup_time_total),
+            "execution_time_s": float(self.execution_time_total),
+            "certificate_cost_s": None if self.certificate_cost is None else float(self.certificate_cost),
+            "certificate_gap": None if self.certificate_gap is None else float(self.certificate_gap),
+            "n_rfc": int(self.n_rfc), "candidates": int(self.candidates), "nondominated": int(self.nondominated),
+            "node_expansions": int(self.node_expansions),
+            "setups": [{"x": float(s[0]), "y": float(s[1]), "alpha": float(s[2]), "step_cost_s": float(c),
+                        "patches": [int(i) for i in p], "reachable": [int(i) for i in r]}
+                       for s, c, p, r in zip(self.setups, self.step_costs, self.patches, self.reachable)],
+            "uncoverable": [int(i) for i in self.uncoverable],
+            "uncoverable_causes": [str(c) for c in self.uncoverable_causes],
+            "warnings": list(self.warnings),
+        }
+        if timings:
+            out["seconds"] = float(self.seconds)
+        return out
+
+    def to_json(self, path, timings: bool = False):
+        """Write :meth:`to_dict` atomically as JSON."""
+        from ..io import write_json
+
+        return write_json(self.to_dict(timings=timings), path)
+
+    def to_html(self, path, part, robot=None, params=None):
+        """Meshcat page of the plan on ``part`` (:func:`mavac.viz.scenes.setup_plan_html`)."""
+        from ..viz.scenes import setup_plan_html
+
+        return setup_plan_html(self, part, path, robot=robot, params=params)
+
     def summary(self) -> str:
         """A few lines a person can read."""
         if self.status == "no_solution":
