@@ -150,10 +150,12 @@ def overlay_path(path, frames, params: LissajousParams = LissajousParams(), spee
 def end_overshoot(path, positions) -> tuple[float, float]:
     """How far an overlaid trajectory runs past the start and the end of its nominal path, metres.
 
-    Measured along the path's direction of travel at each end (the tool x axis): a point before
-    the start (behind the first waypoint) or past the end (beyond the last) counts. The
-    impedance deviation along x is ``A_x / kappa_x`` at most (Kabir Sec. VIII: the force
-    oscillation is overlaid on the nominal trajectory), so neither can exceed it.
+    Measured along the path's direction of travel at each end: a point before the start (behind
+    the first waypoint) or past the end (beyond the last) counts. The force oscillation is
+    overlaid on the nominal trajectory (Kabir Sec. VIII), so on a straight end the tool swings past
+    it by at most ``A_x / kappa_x`` (its x axis is the travel direction); where the path turns, part
+    of the across-path swing ``A_y / kappa_y`` points past the end too, and the bound is
+    ``hypot(A_x / kappa_x, A_y / kappa_y)``.
 
     Parameters
     ----------
