@@ -4,7 +4,9 @@ Every subcommand runs as ``python -m mavac ...`` in a subprocess (interpreter st
 included) on meshes written to a temporary folder: MAVAC's three machines (procedural, shipped),
 the cabinet with a pocket and the step under a slab that the tests generate, and a thin open frame
 (four legs and a rim of 4 cm bars, where hidden point removal is most optimistic). ``inspect`` runs
-with ``--visibility hpr`` and ``--visibility raycast`` side by side; ``reach`` and ``setups`` once.
+with ``--visibility hpr`` and ``--visibility raycast`` side by side, and the HPR plan's own poses are
+re-scored by exact ray casting (what HPR claims against what those poses see); ``reach`` and
+``setups`` run once.
 The CLI's defaults are used (paper-scale S at 5 cm) unless ``--fast``.
 
 Prints a table and ends with ``SECONDS cli_inspect_test_bench_raycast <t>``. With
@@ -14,6 +16,7 @@ Prints a table and ends with ``SECONDS cli_inspect_test_bench_raycast <t>``. Wit
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import subprocess
 import sys
@@ -64,6 +67,29 @@ def _meshes(folder: Path) -> dict:
     return out
 
 
+def _hpr_plan_rescored(path: Path, units: str, fast: bool) -> tuple[float, float]:
+    """C that HPR claims for its own plan, and C of the same poses by exact ray casting."""
+    import warnings
+
+    from mavac.experiments.mavac_offline import fast_params
+    from mavac.geometry.machines import machine_from_mesh
+    from mavac.geometry.mesh import load_mesh
+    from mavac.inspection.coverage import coverage_overlap
+    from mavac.inspection.plan import plan_inspection
+    from mavac.params import InspectionParams
+    from mavac.vision.visibility import VisibilityScene, visible_from
+
+    params = fast_params() if fast else InspectionParams()
+    params = dataclasses.replace(params, spot=dataclasses.replace(params.spot, visibility="hpr"),
+                                 guard=dataclasses.replace(params.guard, visibility="hpr"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plan = plan_inspection(machine_from_mesh(load_mesh(path, units=units, role="machine")), params=params)
+    exact = visible_from(plan.points, plan.normals, plan.world_T_camera, params.camera, method="raycast",
+                         mesh=VisibilityScene(plan.mesh))
+    return plan.C, coverage_overlap(exact, len(plan.points))[0]
+
+
 def _run(argv: list[str]) -> float:
     t0 = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "mavac", *argv, "--quiet"], capture_output=True, text=True)
@@ -95,6 +121,9 @@ def main() -> None:
                 rows.append((name, f"inspect --visibility {vis}", s, plan["C"]))
                 print(f"{name:16s} {'inspect --visibility ' + vis:32s} {s:8.1f}  C = {plan['C']:.3f} "
                       f"({plan['visibility']}), {len(plan['spots'])} spots, {len(plan['poses'])} poses", flush=True)
+            claimed, exact = _hpr_plan_rescored(path, units, args.fast)
+            print(f"{name:16s} {'(HPR plan, re-scored exactly)':32s} {'':8s}  HPR says C = {claimed:.3f}, "
+                  f"ray casting of the same poses C = {exact:.3f}", flush=True)
         for name in ("test_bench", "cabinet"):
             path, units, _ = meshes[name]
             out = tmp / f"{name}_reach.html"

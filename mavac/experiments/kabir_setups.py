@@ -606,6 +606,6 @@ def plot_fig9(df: pd.DataFrame):
             axes[1, i].semilogx(g.n_repeat, g.probability, lw=1, label=f"q = {q}")
         axes[1, i].set_xlabel("N_repeat")
         axes[1, i].set_ylabel("probability")
-        axes[1, i].legend(fontsize=6, ncol=2, title="q = minimum cover size", title_fontsize=6, loc="lower right")
+        axes[1, i].legend(fontsize=6, ncol=2, title="q = minimum cover size\n(q and m - q coincide)", title_fontsize=6, loc="lower right")
     fig.tight_layout()
     return fig

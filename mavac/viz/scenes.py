@@ -248,7 +248,12 @@ def setup_plan_html(plan, part, path, robot=None, params=None):
             tracks = _robot_tracks(robot, "robot", np.repeat(np.eye(4)[None], len(times), 0), qs)
             tracks["part"] = base_T_part(setups_k, space)
             ms.animate(vis, tracks, times=times, fps=FPS)
-        ms.frame_camera(vis, [-0.4, lo[1], floor], hi[:2] + [0.9], direction=(0.2, -1.3, 0.9))
+        # frame the arm (joint 1 at the origin) and the part's placements, not the whole table
+        centres = Ts[:, :3, 3]
+        reach = max(r, 0.25)
+        ms.frame_camera(vis, np.minimum(centres.min(axis=0) - reach, [-0.2, -0.2, -0.3]),
+                        np.maximum(centres.max(axis=0) + reach, [0.2, 0.2, float(part.mesh.extents[2]) + 0.3]),
+                        direction=(0.3, -1.3, 0.8))
         entries = [(colors[j], f"setup {j + 1}: x = {s[0]:.2f} m, y = {s[1]:.2f} m, alpha = "
                                f"{math.degrees(s[2]):.0f} deg, {len(plan.patches[j])} patches")
                    for j, s in enumerate(plan.setups)]
