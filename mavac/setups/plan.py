@@ -186,10 +186,7 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
                          f"length, got {n}, {len(normals)}, {len(area)}, {len(passes)}")
     if n == 0:
         return _empty_plan(name, time.perf_counter() - t0)
-    notes = []
-    oversized = oversized_patches(area)
-    if oversized:
-        notes.append(oversized)
+    notes = [m for m in (oversized_patches(area),) if m]  # patches larger than the tool tip
     if robot is None:
         from ..robots.models import puma560
 
@@ -206,18 +203,8 @@ def plan_setups(part, robot=None, params: SetupPlanParams | None = None) -> Setu
     cover = sampled.nondominated_cover
     setups = sampled.nondominated_setups
     if len(setups) == 0:
-        plan = _empty_plan(name, 0.0)
-        plan.n_rfc, plan.candidates, plan.status = reach.n_rfc, len(sampled.setups), "no_solution"
-        plan.certificate_cost = plan.certificate_gap = None
-        plan.uncoverable = np.arange(n)
-        plan.uncoverable_causes, plan.warnings = _left_out(plan.uncoverable, vertices, normals, area, robot,
-                                                           params, mesh, notes)
-        across = float(np.ptp(vertices.reshape(-1, 3), axis=0).max())
-        plan.warnings.append(f"the stain spans {across:.3g} m; if the part is really much larger or smaller, "
-                             "it was read in the wrong units (load_mesh(path, units=...))")
-        _warn_all(plan.warnings)
-        plan.seconds = time.perf_counter() - t0
-        return plan
+        causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
+        return _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
 
     t_s = params.planner.setup_time
     costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
@@ -249,9 +236,22 @@ def _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes):
     return causes, notes + [unreachable_message(causes, area[uncoverable], float(area.sum()), len(area))]
 
 
-def _warn_all(notes) -> None:
+def _warn_all(notes, stacklevel: int = 3) -> None:
     for note in notes:
-        _warnings.warn(note, stacklevel=3)
+        _warnings.warn(note, stacklevel=stacklevel)
+
+
+def _no_solution(name, n_rfc, candidates, causes, notes, vertices, seconds) -> SetupPlan:
+    """No candidate reaches any patch: no plan, no cost, no certificate, and why."""
+    plan = _empty_plan(name, seconds)
+    plan.n_rfc, plan.candidates, plan.status = n_rfc, candidates, "no_solution"
+    plan.certificate_cost = plan.certificate_gap = None
+    plan.uncoverable, plan.uncoverable_causes = np.arange(len(vertices)), causes
+    across = float(np.ptp(vertices.reshape(-1, 3), axis=0).max())
+    plan.warnings = notes + [f"the stain spans {across:.3g} m; if the part is really much larger or smaller, "
+                             "it was read in the wrong units (load_mesh(path, units=...))"]
+    _warn_all(plan.warnings, stacklevel=4)
+    return plan
 
 
 def _empty_plan(name: str, seconds: float) -> SetupPlan:
