@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 
 import matplotlib.pyplot as plt
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 import numpy as np
 import pandas as pd
 
@@ -83,11 +85,13 @@ def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: in
 
 
 def table1_summary(trials_df: pd.DataFrame, with_machine: bool = False) -> pd.DataFrame:
-    """Means over trials: ``[machine,] P_s, trials, spots_mean, C_mean, O_mean``."""
+    """Means and standard deviations (ddof 1) over trials: ``[machine,] P_s, trials, spots_mean,
+    C_mean, O_mean, spots_std, C_std, O_std``."""
     keys = ["machine", "P_s"] if with_machine else ["P_s"]
     g = trials_df.groupby(keys, sort=True)
     out = g.agg(trials=("seed", "nunique"), spots_mean=("spots", "mean"), C_mean=("C", "mean"),
-                O_mean=("O", "mean")).reset_index()
+                O_mean=("O", "mean"), spots_std=("spots", "std"), C_std=("C", "std"),
+                O_std=("O", "std")).reset_index()
     return out
 
 
@@ -312,11 +316,17 @@ def plan_timings(plans) -> pd.DataFrame:
 
 
 def plot_table1(summary: pd.DataFrame, paper: pd.DataFrame | None = None):
-    """Spots, C and O against P_s (ours: solid, paper: dashed)."""
+    """Spots, C and O against P_s (ours: solid, mean +- one standard deviation over the trials;
+    paper: dashed)."""
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
-    axes[0].plot(summary["P_s"], summary["spots_mean"], "o-", label="ours")
-    axes[1].plot(summary["P_s"], summary["C_mean"], "o-", color="tab:green", label="C ours")
-    axes[1].plot(summary["P_s"], summary["O_mean"], "o-", color="tab:red", label="O ours")
+    n = int(summary["trials"].min()) if "trials" in summary else 0
+    bars = dict(capsize=3, elinewidth=1)
+    axes[0].errorbar(summary["P_s"], summary["spots_mean"], yerr=summary.get("spots_std"), fmt="o-",
+                     label=f"ours (mean +- s.d., {n} trials)", **bars)
+    axes[1].errorbar(summary["P_s"], summary["C_mean"], yerr=summary.get("C_std"), fmt="o-", color="tab:green",
+                     label="C ours (mean +- s.d.)", **bars)
+    axes[1].errorbar(summary["P_s"], summary["O_mean"], yerr=summary.get("O_std"), fmt="o-", color="tab:red",
+                     label="O ours (mean +- s.d.)", **bars)
     if paper is not None:
         axes[0].plot(paper["P_s"], paper["spots"], "s--", color="grey", label="paper")
         axes[1].plot(paper["P_s"], paper["C"], "s--", color="tab:green", alpha=0.5, label="C paper")
@@ -391,7 +401,8 @@ def plot_guard_view(plan, pose: int | None = None):
 
 
 def plot_nos_gateway(plan, cluster: int | None = None, ray_length: float = 0.6):
-    """MAVAC Fig. 4: the rays cast from a NoS cluster (red: blocked, green: best gateway)."""
+    """MAVAC Fig. 4: the rays cast from a NoS cluster (red: blocked, green: through the best gateway,
+    orange: through another gateway), with a legend."""
     cl = [c for c in plan.nos_clusters if c.best_gateway is not None]
     if not cl:
         raise ValueError("the plan has no NoS cluster with a gateway")
@@ -399,11 +410,19 @@ def plot_nos_gateway(plan, cluster: int | None = None, ray_length: float = 0.6):
     fig, ax = _mesh_axes(plan.mesh)
     ax.scatter(*plan.points[c.members].T, s=5, c="tab:blue", label=f"NoS cluster {c.label} ({len(c.members)})")
     o = c.origin
-    for d, esc, t in zip(c.directions, c.escaping, c.hit_distance):
-        if not esc:  # blocked rays end where they hit the machine or the floor
-            ax.plot(*np.column_stack([o, o + min(t, ray_length) * d]), color="red", lw=0.3, alpha=0.4)
-    for d in c.best_gateway.ray_directions:
-        ax.plot(*np.column_stack([o, o + ray_length * d]), color="green", lw=0.8)
+    ax.scatter(*o, s=40, c="k", marker="x", label="cluster centre (ray origin)")
+    blocked = np.flatnonzero(~c.escaping)
+    for k, i in enumerate(blocked):  # blocked rays end where they hit the machine or the floor
+        ax.plot(*np.column_stack([o, o + min(c.hit_distance[i], ray_length) * c.directions[i]]), color="red",
+                lw=0.3, alpha=0.4, label=f"blocked ray ({len(blocked)})" if k == 0 else None)
+    for k, d in enumerate(c.best_gateway.ray_directions):
+        ax.plot(*np.column_stack([o, o + ray_length * d]), color="green", lw=0.8,
+                label=f"ray through the best gateway ({c.best_gateway.n_rays})" if k == 0 else None)
+    best = np.isclose(c.directions[:, None, :], c.best_gateway.ray_directions[None]).all(axis=2).any(axis=1)
+    others = np.flatnonzero(c.escaping & ~best)
+    for k, i in enumerate(others):
+        ax.plot(*np.column_stack([o, o + ray_length * c.directions[i]]), color="orange", lw=0.5,
+                label=f"escaping ray, another gateway ({len(others)})" if k == 0 else None)
     ax.set_title(f"NoS cluster {c.label}: {c.escaping.sum()} escaping rays, "
                  f"{len(c.gateways)} gateway(s), best {c.best_gateway.n_rays} rays")
     ax.legend(loc="upper left")
@@ -424,9 +443,17 @@ def plot_spots(ctx, P_s_values=(0.02, 0.15)):
         ax.quiver(s[:, 0], s[:, 1], np.cos(s[:, 2]), np.sin(s[:, 2]), color="tab:blue", scale=12, width=0.008)
         for i, (x, y, _) in enumerate(s):
             ax.annotate(str(i + 1), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        visibility = ctx.params.spot.visibility
         ax.set(aspect="equal", xlabel="x [m]", ylabel="y [m]",
-               title=f"P_s = {P_s}: {len(s)} spots, C = {sel.C:.2f}, O = {sel.O:.2f}")
-    fig.tight_layout()
+               title=f"P_s = {P_s}: {len(s)} spots, C = {sel.C:.2f}, O = {sel.O:.2f} ({visibility})")
+
+    handles = [Patch(color="0.8", label="machine footprint"),
+               Line2D([], [], color="0.6", marker=r"$\rightarrow$", ls="", ms=10,
+                      label=f"candidate spot ({len(ctx.candidates)}), arrow = heading"),
+               Line2D([], [], color="tab:blue", marker=r"$\rightarrow$", ls="", ms=12,
+                      label="chosen spot, numbered in selection order")]
+    fig.legend(handles=handles, loc="lower center", ncol=3, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     return fig
 
 
