@@ -81,17 +81,19 @@ def check_int(name: str, value, lo: int = 0, hi: int | None = None) -> int:
 
 
 def check_array(name: str, value, dtype=None) -> np.ndarray:
-    """``np.asarray(value, dtype)`` with numpy's refusals (ragged nesting, text where numbers
-    are meant, ``None``) turned into errors naming the parameter."""
+    """``np.asarray(value, dtype)`` of numbers, with numpy's refusals (ragged nesting) turned
+    into errors naming the parameter, and text or ``None`` refused rather than parsed."""
     if value is None:
         raise ParameterTypeError(f"{name} must be an array, got None")
     try:
-        a = np.asarray(value, dtype=dtype)
+        a = np.asarray(value)
+        if a.dtype.kind == "O" and dtype is not None:  # e.g. a list mixing numpy scalars and ints
+            a = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} must be a rectangular array of numbers ({exc})") from None
-    if a.dtype.kind in "OUSV" and dtype is None:
+    if a.dtype.kind in "OUSV":
         raise ParameterTypeError(f"{name} must be an array of numbers, got dtype {a.dtype}")
-    return a
+    return a if dtype is None else a.astype(dtype, copy=False)
 
 
 def check_points(name: str, array, dim: int = 3) -> np.ndarray:

@@ -320,6 +320,7 @@ def _cases_unnamed():
     from mavac.setups.reach import base_T_part
     from mavac.sim import wear
     from mavac.vision import camera, icp, stain
+    from mavac.viz import meshcat_scene
 
     box = trimesh.creation.box()
     return [
@@ -362,6 +363,8 @@ def _cases_unnamed():
                TypeError, "mesh"),
         refuse("unnamed", "cleaning_performance-ragged", lambda: stain.cleaning_performance(RAGGED, RAGGED),
                ValueError, "mask_before"),
+        refuse("unnamed", "frame_camera-nan-box", lambda: meshcat_scene.frame_camera(None, [np.nan] * 3, [1, 1, 1]),
+               ValueError, "lower"),
         refuse("unnamed", "scrub_faces-params-None", lambda: wear.scrub_faces([0.5], None), TypeError, "params"),
     ]
 
@@ -372,6 +375,7 @@ def _cases_accepted():
     from mavac.geometry.transforms import se2_to_matrix
     from mavac.parallel import map_trials
     from mavac.scrubbing.execution import cover_from_patches
+    from mavac.vision import camera
     from mavac.vision.stain import view_of_faces
 
     return [
@@ -392,8 +396,33 @@ def _cases_accepted():
         refuse("accepted", "sample_surface-spacing-True", lambda: sample_surface(trimesh.creation.box(), True),
                TypeError, "spacing"),
         refuse("accepted", "se2_to_matrix-str", lambda: se2_to_matrix("1", 0, 0), TypeError, r"\bx\b"),
+        refuse("accepted", "fov_masks-numeric-strings", lambda: camera.fov_masks(
+            [["1", "0", "0"]], np.eye(4), P.CameraParams()), TypeError, "points_world"),
         refuse("accepted", "map_trials-n_jobs-str", lambda: map_trials(abs, [1, 2], n_jobs="2", progress=False),
                TypeError, "n_jobs"),
+    ]
+
+
+def _cases_stain_marking():
+    """geometry.stain_marking (marking a stain on your own part), landed from the branch 'user'."""
+    from mavac.geometry import stain_marking as SM
+
+    box = trimesh.creation.box(extents=[0.2, 0.2, 0.1])
+    return [
+        refuse("unnamed", "mark_stain-nan-mesh", lambda: SM.mark_stain(_mesh(*NAN_VERTEX), faces=[0]), ValueError,
+               r"mesh has 1 vertices with NaN"),
+        refuse("unnamed", "mark_stain-intensity-ragged", lambda: SM.mark_stain(box, faces=[0, 1], intensity=RAGGED),
+               ValueError, "intensity"),
+        refuse("accepted", "mark_stain-passes-str", lambda: SM.mark_stain(box, faces=[0], passes="2"), TypeError,
+               "passes"),
+        refuse("accepted", "passes_from_intensity-float-range", lambda: SM.passes_from_intensity([0.5], (1.5, 3)),
+               ValueError, "pass_range"),
+        refuse("accepted", "mark_stain-max_patch_area-0", lambda: SM.mark_stain(box, faces=[0], max_patch_area=0),
+               ValueError, "max_patch_area"),
+        refuse("accepted", "subdivide_faces-nan-stained", lambda: SM.subdivide_faces(box, np.full(12, np.nan)),
+               ValueError, "stained"),
+        refuse("hang", "subdivide_faces-tiny-max_area", lambda: SM.subdivide_faces(
+            box, np.arange(12) == 0, max_area=1e-30, max_rounds=11), ValueError, "max_area"),
     ]
 
 
@@ -434,8 +463,8 @@ def _cases_process():
 
 
 def hand_written_cases() -> list[Case]:
-    return (_cases_wrong() + _cases_dependency() + _cases_unnamed() + _cases_accepted() + _cases_hang()
-            + _cases_process())
+    return (_cases_wrong() + _cases_dependency() + _cases_unnamed() + _cases_accepted() + _cases_stain_marking()
+            + _cases_hang() + _cases_process())
 
 
 # ---- generated: every field of every parameter dataclass ----

@@ -26,7 +26,9 @@ import warnings
 import numpy as np
 import trimesh
 
-from ..validate import check_points, check_positive, check_range
+from ..validate import (check_array, check_bool_array, check_indices, check_int, check_points, check_positive,
+                        check_range, check_size)
+from .mesh import check_mesh
 from .parts import SYNTHETIC_MAX_FACE_AREA, Part, part_from_mesh
 
 #: largest patch area before a warning, m^2: Kabir IX-A, "less than 1.5 cm^2"
@@ -37,9 +39,7 @@ DIRECTIONS = {"up": (0, 0, 1), "down": (0, 0, -1), "+x": (1, 0, 0), "-x": (-1, 0
 
 
 def _mesh(mesh) -> trimesh.Trimesh:
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
-    return mesh
+    return check_mesh("mesh", mesh)
 
 
 def faces_in_cone(mesh, direction=(0.0, 0.0, 1.0), angle_deg: float = 30.0) -> np.ndarray:
@@ -130,10 +130,12 @@ def faces_from_colors(mesh, stain_color=None, tolerance: float = 0.25):
 def passes_from_intensity(intensity, pass_range=(1, 3)) -> np.ndarray:
     """Passes in ``pass_range`` from intensities in (0, 1]: equal intensity bands
     (the convention of :func:`mavac.geometry.parts.stain_from_field`)."""
-    lo, hi = (int(v) for v in pass_range)
-    if not 1 <= lo <= hi <= 3:
+    if np.shape(pass_range) != (2,):
+        raise ValueError(f"pass_range must be a pair (low, high), got {pass_range!r}")
+    lo, hi = (check_int("pass_range", v, 1, 3) for v in pass_range)
+    if not lo <= hi:
         raise ValueError(f"pass_range must satisfy 1 <= low <= high <= 3, got {pass_range!r}")
-    x = np.asarray(intensity, dtype=float)
+    x = check_array("intensity", intensity, float)
     if not np.all((x > 0) & (x <= 1)):
         raise ValueError("intensity must be in (0, 1] on every stained face")
     levels = hi - lo + 1
@@ -151,6 +153,16 @@ def oversized_patches(areas, max_area: float = TOOL_TIP_AREA) -> str | None:
             f"{a.max() * 1e4:.3g} cm^2: a patch counts as cleaned only when the tool reaches all three "
             "corners, so large patches make reach and time coarse; split them (subdivide=True, "
             "or --subdivide on the command line)")
+
+
+#: Faces a subdivision may create: ~50 times the largest of our parts (hull, 22,770 faces, x 4 per
+#: round where needed); a tiny ``max_area`` would otherwise exhaust memory (each round quadruples).
+MAX_SUBDIVIDED_FACES = 1_000_000
+
+
+def _check_subdivision_size(areas: np.ndarray, max_area: float, max_rounds: int) -> None:
+    rounds = np.clip(np.ceil(np.log(np.maximum(areas / max_area, 1.0)) / np.log(4.0)), 0, max_rounds)
+    check_size("max_area", max_area, float(np.sum(4.0 ** rounds)), MAX_SUBDIVIDED_FACES, "faces")
 
 
 def subdivide_faces(mesh, stained, max_area: float = TOOL_TIP_AREA, max_rounds: int = 8):
@@ -172,10 +184,14 @@ def subdivide_faces(mesh, stained, max_area: float = TOOL_TIP_AREA, max_rounds: 
         Original face of every face of the new mesh.
     """
     check_positive("max_area", max_area)
+    max_rounds = check_int("max_rounds", max_rounds, 0)
     mesh = _mesh(mesh)
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     parent = np.arange(len(faces))
-    stained = np.asarray(stained, dtype=bool).copy()
+    stained = check_bool_array("stained", stained).copy()
+    if stained.shape != (len(faces),):
+        raise ValueError(f"stained must have shape ({len(faces)},), got {stained.shape}")
+    _check_subdivision_size(np.asarray(mesh.area_faces)[stained], max_area, max_rounds)
     for _ in range(max_rounds):
         area = trimesh.triangles.area(vertices[faces])
         split = np.flatnonzero(stained & (area > max_area))
@@ -200,17 +216,9 @@ def _selection(mesh, faces, cone, box, sphere, colors):
     mask = np.ones(n, dtype=bool)
     intensity = None
     if faces is not None:
-        f = np.asarray(faces)
-        if f.dtype == bool:
-            if f.shape != (n,):
-                raise ValueError(f"faces: a boolean mask must have shape ({n},), got {f.shape}")
-            mask &= f
-        else:
-            if f.ndim != 1 or not np.issubdtype(f.dtype, np.integer) or (len(f) and (f.min() < 0 or f.max() >= n)):
-                raise ValueError(f"faces must be a boolean mask or face indices in [0, {n - 1}]")
-            sel = np.zeros(n, dtype=bool)
-            sel[f] = True
-            mask &= sel
+        sel = np.zeros(n, dtype=bool)
+        sel[check_indices("faces", faces, n)] = True
+        mask &= sel
     if cone is not None:
         mask &= faces_in_cone(mesh, *cone)
     if box is not None:
@@ -227,7 +235,7 @@ def _selection(mesh, faces, cone, box, sphere, colors):
 
 def _face_values(name, values, mask, n):
     """Per-stained-face values from a scalar, an (n_faces,) or a (k,) array."""
-    v = np.asarray(values, dtype=float)
+    v = check_array(name, values, float)
     k = int(mask.sum())
     if v.ndim == 0:
         return np.full(k, float(v))
@@ -283,6 +291,7 @@ def mark_stain(mesh, *, faces=None, cone=None, box=None, sphere=None, colors=Non
         When stained faces are larger than ``max_patch_area`` and ``subdivide`` is False.
     """
     mesh = _mesh(mesh)
+    check_positive("max_patch_area", max_patch_area)
     n = len(mesh.faces)
     mask, color_intensity = _selection(mesh, faces, cone, box, sphere, colors)
     if not mask.any():

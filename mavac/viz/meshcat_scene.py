@@ -27,6 +27,7 @@ import numpy as np
 
 from ..geometry.transforms import check_transform, check_transforms
 from ..io import write_text
+from ..validate import check_points
 
 #: vertical field of view of meshcat's default perspective camera, degrees
 CAMERA_FOV_DEG = 75.0
@@ -226,8 +227,10 @@ def frame_camera(vis, lower, upper, direction=(1.0, -1.3, 0.8), margin: float = 
     The orbit target is the box centre; the camera looks from ``direction`` (world frame) at the
     distance where the box's bounding sphere fits meshcat's 75 deg field of view, times ``margin``.
     """
-    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
-    d = np.asarray(direction, dtype=float)
+    lo, hi = check_points("lower", lower)[0], check_points("upper", upper)[0]
+    d = check_points("direction", direction)[0]
+    if np.linalg.norm(d) == 0:
+        raise ValueError("direction must be a non-zero vector")
     d = d / np.linalg.norm(d)
     radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-3)
     offset = d * margin * radius / math.sin(math.radians(CAMERA_FOV_DEG / 2.0))
