@@ -352,11 +352,14 @@ class OfflineContext:
     candidates : (m, 3) float
         Collision-free candidate spots.
     accessible : (m, n) bool
+        Visible AND reachable elements per candidate (``params.spot``'s visibility).
     clear : (n,) bool
         Elements whose normal segment to their guard point is free.
     targets : (k,) int
         Guard targets: one representative per small cluster of S.
     timings : dict
+    reachable : (m, n) bool
+        Elements whose inspecting camera pose is in the reachability map from each candidate.
     """
 
     machine: object
@@ -372,8 +375,16 @@ class OfflineContext:
     vis_scene: object = field(repr=False, default=None)
     checker: object = field(repr=False, default=None)
     timings: dict = field(default_factory=dict)
+    reachable: np.ndarray | None = field(default=None, repr=False)
     _guards: dict = field(default_factory=dict, repr=False)
     _visibility: dict = field(default_factory=dict, repr=False)
+
+    def accessible_with(self, spot_params) -> np.ndarray:
+        """Accessible sets (m, n) bool of the candidates under other spot-visibility settings
+        (``visibility``, ``hpr_radius_factor``, ``view_heights`` of ``spot_params``), e.g. Table 1
+        with HPR and with ray casting from one context."""
+        return self.reachable & _spot_visibility(self.points, self.normals, self.candidates, spot_params,
+                                                 self.vis_scene)
 
     def guard_candidates(self, row: int):
         """Feasible guard candidates of candidate spot ``row`` (computed once, then cached).
@@ -397,15 +408,17 @@ class OfflineContext:
 
 
 def _accessible_candidates(machine, robot, rmap, points, normals, params: InspectionParams, vis_scene):
-    """Collision-free candidate spots (m, 3) and their accessible sets (m, n) bool."""
+    """Collision-free candidate spots (m, 3), their reachable sets and accessible sets (m, n) bool."""
     cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
     cands = cands[SP.collision_free_spots(robot, machine.mesh, cands, margin=params.guard.collision_margin)]
-    if len(cands):
-        spot_vis = SP.spot_visibility(points, normals, cands, params.spot, camera=params.camera,
-                                      vis_scene=vis_scene)
-    else:
-        spot_vis = np.zeros((0, len(points)), dtype=bool)
-    return cands, SP.accessible_sets(rmap, cands, points, normals, spot_vis, params.camera)
+    reach = SP.reachable_sets(rmap, cands, points, normals, params.camera)
+    return cands, reach, reach & _spot_visibility(points, normals, cands, params.spot, vis_scene)
+
+
+def _spot_visibility(points, normals, cands, spot_params, vis_scene) -> np.ndarray:
+    if not len(cands):
+        return np.zeros((0, len(points)), dtype=bool)
+    return SP.spot_visibility(points, normals, cands, spot_params, vis_scene=vis_scene)
 
 
 def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | None = None,
@@ -436,13 +449,13 @@ def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | N
         rmap = reachability_map(robot, params.reach) if rmap is None else rmap
     vis_scene = VisibilityScene(machine.mesh)
     with _timed(timings, "accessible_sets"):
-        cands, acc = _accessible_candidates(machine, robot, rmap, P, N, params, vis_scene)
+        cands, reach, acc = _accessible_candidates(machine, robot, rmap, P, N, params, vis_scene)
     scene = raycasting_scene(machine.mesh)
     clear = SP.guard_clearance(scene, P, N, params.camera.L_d)
     checker = CollisionChecker(robot, machine.mesh, margin=params.guard.collision_margin, floor=True)
     targets = G.guard_targets(P, N, params.guard.guard_spacing)
     return OfflineContext(machine, robot, params, P, N, cands, acc, clear, targets, scene, vis_scene,
-                          checker, timings)
+                          checker, timings, reachable=reach)
 
 
 def _empty_plan(ctx, sel, timings, message) -> InspectionPlan:
