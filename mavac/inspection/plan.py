@@ -322,8 +322,9 @@ def _timed(timings: dict, stage: str):
     timings[stage] = time.perf_counter() - t0
 
 
-def _surface(mesh, spacing: float, seed: int):
-    """S on the machine, without the faces standing on the floor (not exposed)."""
+def surface_elements(mesh, spacing: float, seed: int):
+    """S on the machine (:class:`mavac.geometry.surface.SurfacePoints`), without the faces
+    standing on the floor (not exposed)."""
     s = sample_surface(mesh, spacing, seed=seed)
     return s.subset(~on_floor(s.points[:, 2], s.normals[:, 2]))
 
@@ -400,10 +401,17 @@ class OfflineContext:
                                                    self.targets[acc], self.params.camera, rng)
         return self._guards[row]
 
-    def select_guards(self, row: int, guard_params, covered):
-        """Greedy guard selection at candidate spot ``row``, visibility results cached."""
+    def select_guards(self, row: int, guard_params, covered, *, maneuverability=None):
+        """Greedy guard selection at candidate spot ``row``, visibility results cached.
+
+        ``maneuverability``, a function of the configurations ``(g, nq) -> (g,)``, replaces the
+        candidates' I_m in eq. 3 (e.g. one factor of it); default: their I_m.
+        """
         cache = self._visibility.setdefault((row, guard_params.visibility, guard_params.hpr_input), {})
-        return G.select_guards(self.guard_candidates(row), self.points, self.normals, self.params.camera,
+        cands = self.guard_candidates(row)
+        if maneuverability is not None and len(cands):
+            cands = dataclasses.replace(cands, maneuverability=np.asarray(maneuverability(cands.q), dtype=float))
+        return G.select_guards(cands, self.points, self.normals, self.params.camera,
                                guard_params, covered=covered, vis_scene=self.vis_scene, cache=cache)
 
 
@@ -443,7 +451,7 @@ def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | N
         raise ValueError(f"robot {robot.name} has no camera_frame; MAVAC guards need a camera on the arm")
     timings = {}
     with _timed(timings, "surface"):
-        surf = _surface(machine.mesh, params.surface_spacing, params.seed)
+        surf = surface_elements(machine.mesh, params.surface_spacing, params.seed)
     P, N = surf.points, surf.normals
     with _timed(timings, "reachability_map"):
         rmap = reachability_map(robot, params.reach) if rmap is None else rmap
@@ -495,11 +503,13 @@ def spot_tour(selection: SpotSelection) -> tuple[np.ndarray, np.ndarray]:
     return spots[tour], selection.greedy.selected[tour]
 
 
-def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = False) -> list:
+def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = False, *,
+                    maneuverability=None) -> list:
     """Greedy guard selection at each spot, in tour order (MAVAC, "Guard selection").
 
     Elements seen by the guards of earlier spots are carried over as covered: they no longer
-    count as new for the guards of later spots.
+    count as new for the guards of later spots. ``maneuverability`` optionally replaces I_m in
+    eq. 3 (see :meth:`OfflineContext.select_guards`).
 
     Returns
     -------
@@ -508,7 +518,7 @@ def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = Fa
     covered = np.zeros(len(ctx.points), dtype=bool)
     selections = []
     for row in tqdm(rows, desc="guards", disable=not progress, leave=False):
-        selection = ctx.select_guards(int(row), guard_params, covered)
+        selection = ctx.select_guards(int(row), guard_params, covered, maneuverability=maneuverability)
         covered = selection.greedy.covered
         selections.append(selection)
     return selections
