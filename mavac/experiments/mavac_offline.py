@@ -357,8 +357,6 @@ def k1_summary(effect: pd.DataFrame) -> pd.DataFrame:
 # HPR against exact ray casting
 
 
-
-
 def _guard_poses(machine: str, n_poses: int, P_s: float, params: InspectionParams):
     """Prepared context and at most ``n_poses`` feasible guard camera poses (m, 4, 4) of the
     spots selected with ``P_s``, subsampled with ``params.seed``."""
