@@ -1,5 +1,6 @@
 # Two commands do all the setup: `make test` and `make reproduce`.
-PYTHON ?= python3.11
+# Any Python >= 3.11; python3.11 (the version constraints.txt is tested on) when present.
+PYTHON ?= $(shell command -v python3.11 >/dev/null 2>&1 && echo python3.11 || echo python3)
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
@@ -10,7 +11,7 @@ NB := $(sort $(wildcard notebooks/*.ipynb))
 # the same seed give the same CSV, byte for byte (parallelism comes from joblib processes).
 export OMP_NUM_THREADS := 1
 
-.PHONY: test unit notebooks reproduce bench system-deps clean
+.PHONY: test unit notebooks reproduce bench system-deps browser clean
 
 test: unit notebooks
 
@@ -28,15 +29,32 @@ system-deps:
 	  fi; \
 	fi
 
-$(STAMP): pyproject.toml | system-deps
-	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need $(PYTHON) (Python 3.11) on PATH"; exit 1; }
+# Headless Chromium renders the exported HTML for the screenshot test. It is optional: when it
+# cannot be installed (not root, no apt), say why and go on; that one test then skips.
+browser:
+	@if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 \
+	    || command -v google-chrome >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "installing chromium (headless screenshot test of the HTML viewer)"; \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } \
+	    || echo "chromium could not be installed (apt-get failed); the screenshot test will be skipped"; \
+	else \
+	  echo "chromium is not installed and cannot be installed here (needs root and apt-get);"; \
+	  echo "the screenshot test will be skipped. To run it: sudo apt-get install -y chromium"; \
+	fi
+
+# Version ranges live in pyproject.toml; the exact tested set in constraints.txt.
+$(STAMP): pyproject.toml constraints.txt | system-deps
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need Python >= 3.11 on PATH (set PYTHON=...)"; exit 1; }
+	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
+	  || { echo "$(PYTHON) is older than Python 3.11; set PYTHON=python3.11 (or newer)"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e ".[test]"
+	$(PY) -m pip install -q -c constraints.txt -e ".[test]"
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	touch $(STAMP)
 
-unit: system-deps $(STAMP)
+unit: system-deps browser $(STAMP)
 	$(PY) -m pytest -q tests
 
 # Every notebook under nbval in fast mode; fast mode writes under build/, never data/results/.

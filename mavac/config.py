@@ -2,6 +2,11 @@
 
 Fast mode (``MAVAC_FAST=1``) shrinks sample counts and trial numbers and redirects every
 artifact under ``build/`` so a CI run never overwrites the committed paper-scale results.
+
+Where outputs go: ``MAVAC_OUT`` when set; otherwise the repository root when ``mavac`` runs
+from a source checkout (so the notebooks write the committed ``data/results`` and
+``figures``); otherwise the current directory. An installed package never writes next to
+itself.
 """
 
 from __future__ import annotations
@@ -24,22 +29,51 @@ def fast_or_full(fast, full):
     return fast if is_fast() else full
 
 
+def in_checkout() -> bool:
+    """True when the package runs from a source checkout (editable install or ``PYTHONPATH``)."""
+    return (ROOT / "pyproject.toml").is_file() and (ROOT / "notebooks").is_dir()
+
+
+def user_output_dir() -> Path:
+    """Folder the user chose for outputs: ``MAVAC_OUT``, else the current directory."""
+    out = os.environ.get("MAVAC_OUT", "").strip()
+    return Path(out).expanduser() if out else Path.cwd()
+
+
+def output_root() -> Path:
+    """Root of the notebooks' outputs: ``MAVAC_OUT``, else the checkout, else the current directory."""
+    if os.environ.get("MAVAC_OUT", "").strip() or not in_checkout():
+        return user_output_dir()
+    return ROOT
+
+
 def results_dir() -> Path:
-    """Where result CSVs go: ``data/results`` at paper scale, ``build/results`` in fast mode."""
-    path = BUILD_DIR / "results" if is_fast() else DATA_DIR / "results"
+    """Where result CSVs go: ``data/results`` at paper scale, ``build/results`` in fast mode,
+    under :func:`output_root`."""
+    root = output_root()
+    path = root / "build" / "results" if is_fast() else root / "data" / "results"
     path.mkdir(parents=True, exist_ok=True)
     return path
 
 
 def figures_dir() -> Path:
-    """Where figures go: ``figures`` at paper scale, ``build/figures`` in fast mode."""
-    path = BUILD_DIR / "figures" if is_fast() else ROOT / "figures"
+    """Where figures go: ``figures`` at paper scale, ``build/figures`` in fast mode, under
+    :func:`output_root`."""
+    root = output_root()
+    path = root / "build" / "figures" if is_fast() else root / "figures"
     path.mkdir(parents=True, exist_ok=True)
     return path
 
 
 def cache_dir() -> Path:
-    """On-disk cache for expensive stages (``MAVAC_CACHE`` overrides)."""
-    path = Path(os.environ.get("MAVAC_CACHE", BUILD_DIR / "cache"))
+    """On-disk cache for expensive stages: ``MAVAC_CACHE``, else ``build/cache`` in a checkout,
+    else the user's cache folder (``$XDG_CACHE_HOME/mavac`` or ``~/.cache/mavac``)."""
+    env = os.environ.get("MAVAC_CACHE", "").strip()
+    if env:
+        path = Path(env).expanduser()
+    elif in_checkout():
+        path = BUILD_DIR / "cache"
+    else:
+        path = Path(os.environ.get("XDG_CACHE_HOME", "") or Path.home() / ".cache") / "mavac"
     path.mkdir(parents=True, exist_ok=True)
     return path

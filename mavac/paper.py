@@ -21,6 +21,9 @@ PAPER_VALUES_CSV = DATA_DIR / "paper_values.csv"
 
 @functools.lru_cache(maxsize=1)
 def _load():
+    if not PAPER_VALUES_CSV.is_file():
+        raise ValueError(f"{PAPER_VALUES_CSV} not found: the papers' values ship with the source "
+                         "checkout; install from a clone with `pip install -e .` to use mavac.paper")
     return pd.read_csv(PAPER_VALUES_CSV, keep_default_na=False, dtype={"condition": str})
 
 

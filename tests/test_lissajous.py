@@ -89,3 +89,29 @@ def test_bad_overlay_inputs():
         overlay_path(np.zeros((2, 3)), normals)
     with pytest.raises(ValueError, match="t must"):
         lissajous_force(np.array([0.0, np.nan]))
+
+
+@pytest.mark.parametrize("phase", [math.pi / 2, 0.0, -math.pi / 2])
+def test_overlay_runs_past_the_path_ends_by_at_most_A_over_kappa(phase):
+    # Kabir Sec. VIII: the oscillation is overlaid on the nominal path; on a straight path the
+    # deviation along the travel direction is at most A_x / kappa_x (6 mm for Fig. 3's 30 N, 5000 N/m)
+    from mavac.scrubbing.lissajous import end_overshoot
+
+    p = dataclasses.replace(LissajousParams(), phase=phase)
+    path = np.column_stack([np.linspace(0, 0.06, 30), np.zeros(30), np.zeros(30)])
+    over = overlay_path(path, np.tile([0.0, 0.0, 1.0], (30, 1)), p)
+    before, past = end_overshoot(path, over.positions)
+    limit = p.A_x / p.kappa_x
+    assert before <= limit + 1e-9 and past <= limit + 1e-9
+    assert max(before, past) > 0  # and it does run past an end: the pattern is not clipped
+
+
+def test_overshoot_of_a_turning_path_stays_within_the_combined_swing():
+    from mavac.scrubbing.lissajous import end_overshoot
+
+    p = LissajousParams()
+    angle = np.linspace(0, np.pi / 2, 60)  # a quarter circle of 4 cm radius: the end direction turns
+    path = np.column_stack([0.04 * np.sin(angle), 0.04 * (1 - np.cos(angle)), np.zeros(60)])
+    over = overlay_path(path, np.tile([0.0, 0.0, 1.0], (60, 1)), p)
+    before, past = end_overshoot(path, over.positions)
+    assert max(before, past) <= np.hypot(p.A_x / p.kappa_x, p.A_y / p.kappa_y) + 1e-9

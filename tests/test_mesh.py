@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.geometry.mesh import load_mesh, repair_mesh
+from mavac.geometry.mesh import collada_unit, load_mesh, repair_mesh, units_in_range
 
 
 def _write_box(path, size):
@@ -64,21 +64,69 @@ def test_refuses_nan_and_infinite_vertices(tmp_path):
 
 def test_refuses_a_millimetre_file_read_as_metres(tmp_path):
     path = _write_box(tmp_path / "machine.stl", 1500.0)
-    with pytest.raises(ValueError, match=r"1718 m across after reading it in 'm'; "
-                                         r"if the file is in millimetres pass units='mm'"):
+    with pytest.raises(ValueError, match=r"machine.stl: mesh is 1500 m across after reading it in 'm', but "
+                                         r"a machine or a part is expected to be 0.02 m to 5 m across; "
+                                         r"if the file is in millimetres, pass units='mm' \(1.5 m\)"):
         load_mesh(path, units="m")
 
 
 def test_refuses_a_metre_file_read_as_millimetres(tmp_path):
-    path = _write_box(tmp_path / "part.stl", 0.5)
-    with pytest.raises(ValueError, match=r"across after reading it in 'mm'; .*units='m'"):
-        load_mesh(path, units="mm")
+    path = _write_box(tmp_path / "table.stl", 1.2)
+    with pytest.raises(ValueError, match=r"1.2 mm|0.0012 m across after reading it in 'mm'.*units='m' \(1.2 m\)"):
+        load_mesh(path, units="mm", role="machine")
+
+
+def test_part_read_in_the_wrong_unit_names_every_unit_that_fits(tmp_path):
+    # a 170 mm boat read as metres: 170 m; as a part it fits in cm (1.7 m) and in mm (0.17 m)
+    path = _write_box(tmp_path / "boat.stl", 170.0)
+    with pytest.raises(ValueError, match=r"a part is expected to be 0.02 m to 2 m across; pass the file's unit: "
+                                         r"units='cm' \(1.7 m\) or units='mm' \(0.17 m\)"):
+        load_mesh(path, units="m", role="part")
+    assert load_mesh(path, units="mm", role="part").extents.max() == pytest.approx(0.17)
+
+
+def test_role_ranges_refuse_a_part_sized_machine_and_a_machine_sized_part(tmp_path):
+    small = _write_box(tmp_path / "small.stl", 0.1)
+    with pytest.raises(ValueError, match="a machine is expected to be 0.3 m to 5 m across"):
+        load_mesh(small, units="m", role="machine")
+    assert load_mesh(small, units="m", role="part").extents.max() == pytest.approx(0.1)
+    big = _write_box(tmp_path / "big.stl", 3.0)
+    with pytest.raises(ValueError, match="a part is expected to be 0.02 m to 2 m across"):
+        load_mesh(big, units="m", role="part")
+    with pytest.raises(ValueError, match="role must be"):
+        load_mesh(big, units="m", role="robot")
+
+
+def test_units_in_range():
+    assert units_in_range(40.0, "part") == ["cm", "mm", "in"]  # 40 in = 1.02 m
+    assert units_in_range(1.2, "machine") == ["m"]
+    assert units_in_range(1e9) == []
 
 
 def test_refuses_a_size_no_unit_can_explain(tmp_path):
     path = _write_box(tmp_path / "planet.stl", 1e9)
-    with pytest.raises(ValueError, match="expected between 1 mm and 100 m"):
+    with pytest.raises(ValueError, match="no unit .* brings it into that range"):
         load_mesh(path, units="mm")
+
+
+def _dae_with_unit(path, size, meter):
+    trimesh.creation.box([size, size / 2, size / 4]).export(path)
+    text = path.read_text()
+    text = text.replace("<asset>", f'<asset><unit meter="{meter}" name="declared"/>', 1)
+    path.write_text(text)
+    return path
+
+
+def test_collada_unit_is_read_and_a_disagreement_warns(tmp_path):
+    path = _dae_with_unit(tmp_path / "mm.dae", 1500.0, 0.001)
+    assert collada_unit(path) == pytest.approx(0.001)
+    mesh = _load_quietly(path, units=None)  # the file's own unit
+    assert mesh.extents.max() == pytest.approx(1.5)
+    assert mesh.metadata["mavac_units"] == "mm"
+    _load_quietly(path, units="mm")  # agrees: no warning
+    with pytest.warns(UserWarning, match=r'declares <unit meter="0.001"> \(mm\) but units=.m. was passed'):
+        with pytest.raises(ValueError, match="units='mm'"):
+            load_mesh(path, units="m")
 
 
 def test_repairs_are_reported_in_warnings_and_metadata(tmp_path):
@@ -129,15 +177,15 @@ def test_stl_triangle_soup_is_merged_without_warning(tmp_path):
 def test_repair_mesh_counts_on_a_clean_mesh_are_zero():
     counts = repair_mesh(trimesh.creation.icosphere())
     assert counts == {"degenerate_faces": 0, "duplicate_faces": 0, "merged_vertices": 0,
-                      "unreferenced_vertices": 0, "rewound_faces": 0, "inverted": False}
+                      "unreferenced_vertices": 0, "flipped_faces": 0, "inverted": False}
 
 
-def test_inconsistent_winding_is_rewound_and_reported(tmp_path):
+def test_inconsistent_winding_is_flipped_and_reported(tmp_path):
     box = trimesh.creation.box([1.0, 1.0, 1.0])
     faces = box.faces.copy()
     faces[-1] = faces[-1, ::-1]  # one face wound against its neighbours
     trimesh.Trimesh(box.vertices, faces, process=False).export(tmp_path / "patchy.obj")
-    with pytest.warns(UserWarning, match=r"\b1 rewound faces"):
+    with pytest.warns(UserWarning, match=r"flipped 1 faces \(turned over, not removed\)"):
         mesh = load_mesh(tmp_path / "patchy.obj")
     assert mesh.is_winding_consistent and mesh.volume == pytest.approx(1.0)
     assert not mesh.metadata["mavac_repairs"]["inverted"]
@@ -149,3 +197,18 @@ def test_refuses_unreadable_file(tmp_path, name, text):
     with pytest.raises(ValueError, match="could not be read as a mesh"):
         load_mesh(tmp_path / name)
 
+
+
+def test_open_mesh_keeps_the_majority_orientation_and_warns_about_normals(tmp_path):
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    faces = box.faces[:-2, ::-1].copy()  # open box (top removed), every face turned inward...
+    faces[0] = faces[0, ::-1]  # ...but one
+    trimesh.Trimesh(box.vertices, faces, process=False).export(tmp_path / "open.obj")
+    with pytest.warns(UserWarning, match="flipped 1 faces .*normals-based stain selection"):
+        mesh = load_mesh(tmp_path / "open.obj")
+    assert mesh.metadata["mavac_repairs"]["flipped_faces"] == 1
+    assert mesh.is_winding_consistent
+    # the author's (inward) orientation of the other nine faces is kept
+    centre = mesh.vertices.mean(axis=0)
+    inward = np.einsum("ij,ij->i", mesh.face_normals, mesh.triangles_center - centre) < 0
+    assert inward.all()

@@ -114,3 +114,55 @@ def test_bad_parameters_raise_value_errors():
     bad.passes = bad.passes[:-1]
     with pytest.raises(ValueError, match="same length"):
         plan_setups(bad, robot=robot())
+
+
+def _shifted(part, offset, normal=None):
+    v = part.patch_vertices + np.asarray(offset, float)
+    n = part.patch_normals if normal is None else np.broadcast_to(normal, part.patch_normals.shape).copy()
+    return SimpleNamespace(name="moved", patch_vertices=v, patch_normals=n, patch_areas=part.patch_areas,
+                           passes=part.passes)
+
+
+def test_unreachable_share_warns_with_its_cause():
+    part = small_stain(far_patch=True)
+    params = dataclasses.replace(FAST, sampling=dataclasses.replace(FAST.sampling, max_levels=2))
+    with pytest.warns(UserWarning, match=r"of \d+ stain patches \(\d+ % of the stain area\) are unreachable .*"
+                                         r"1 too far from the arm"):
+        plan = plan_setups(part, robot=robot(), params=params)
+    far = list(plan.uncoverable).index(len(part.passes) - 1)
+    assert plan.uncoverable_causes[far] == "too_far"
+    assert "unreachable" in plan.summary()
+
+
+def test_no_solution_has_no_certificate_and_says_so():
+    part = _shifted(small_stain(step=200), (0.0, 0.0, 5.0))  # 5 m above the table
+    with pytest.warns(UserWarning, match="too high for the arm"):
+        plan = plan_setups(part, robot=robot(), params=FAST)
+    assert plan.status == "no_solution"
+    assert plan.certificate_cost is None and plan.certificate_gap is None
+    assert set(plan.uncoverable_causes) == {"too_high"}
+    text = plan.summary()
+    assert "NO SOLUTION" in text and "MILP optimum" not in text and "wrong units" in text
+
+
+def test_causes_classify_each_left_out_patch():
+    from mavac.params import SetupSpaceParams
+    from mavac.setups.diagnose import unreachable_causes
+
+    tri = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0, 0.01, 0.0]])
+    space = SetupSpaceParams(origin_x=0.0, origin_y=0.0)
+    grid = np.zeros((1, 3))
+    # at the shoulder (inside the reach sphere, no IK), 3 m up, 3 m out, and one the arm reaches
+    v = np.stack([tri, tri + [0, 0, 3.0], tri + [3.0, 0, 0], tri + [0.3, 0.0, -0.5]])
+    n = np.array([[0, 0, 1.0]] * 4)
+    causes = unreachable_causes(robot(), v, n, space, grid=grid)
+    assert causes.tolist() == ["facing_away", "too_high", "too_far", "missed_by_sampling"]
+
+
+def test_patches_larger_than_the_tool_tip_warn():
+    part = small_stain(step=200)
+    part.patch_vertices = part.patch_vertices * 1.0
+    big = SimpleNamespace(**{**vars(part), "patch_areas": np.full(len(part.passes), 4e-4)})
+    with pytest.warns(UserWarning, match="larger than the tool tip"):
+        plan = plan_setups(big, robot=robot(), params=FAST)
+    assert any("tool tip" in w for w in plan.warnings)

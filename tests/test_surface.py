@@ -66,3 +66,14 @@ def test_refuses_bad_seed_and_empty_mesh(sphere):
         sample_surface(sphere, 0.1, seed=-3)
     with pytest.raises(ValueError, match="mesh"):
         sample_surface(trimesh.Trimesh(), 0.1)
+
+
+def test_spacing_errors_point_at_a_unit_mistake():
+    # a 40 mm part read in the wrong unit: "larger than the mesh" names its size and units=
+    tiny = trimesh.creation.box([0.04, 0.02, 0.01])
+    with pytest.raises(ValueError, match=r"larger than the mesh itself .* 0.04 m across: if it is really "
+                                         r"larger, it was read in the wrong units \(load_mesh\(path, units=...\)\)"):
+        sample_surface(tiny, 0.5)
+    huge = trimesh.creation.box([400.0, 200.0, 100.0])  # a 40 cm part read in mm as metres
+    with pytest.raises(ValueError, match=r"would give 28,000,000 points .* 400 m across: if it is really smaller"):
+        sample_surface(huge, 0.1)

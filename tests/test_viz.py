@@ -54,3 +54,24 @@ def test_robot_scene_embeds_links(tmp_path):
     with pytest.raises(ValueError, match="geometry"):
         with meshcat_scene.scene() as vis:
             meshcat_scene.add_robot(vis, "robot", robot, robot.q_home, geometry="wire")
+
+
+def test_no_dead_server_url_is_printed(capsys):
+    with meshcat_scene.scene() as vis:
+        meshcat_scene.add_triad(vis, "frame", np.eye(4))
+    out = capsys.readouterr()
+    assert "http" not in out.out and "http" not in out.err
+
+
+def test_legend_overlay_and_hidden_layer(tmp_path):
+    with meshcat_scene.scene() as vis:
+        meshcat_scene.add_lines(vis, "rays", np.zeros((2, 3)), np.eye(3)[:2])
+        meshcat_scene.set_visible(vis, "rays", False)
+        legend = meshcat_scene.legend_html([((1.0, 0.0, 0.0), "a <red> thing")], title="T",
+                                           colorbar=("viridis", 0.0, 1.0, "score"))
+        html = meshcat_scene.save_html(vis, tmp_path / "l.html", legend=legend).read_text()
+    assert html.count('id="mavac-legend"') == 1 and "a &lt;red&gt; thing" in html
+    assert "rgb(255,0,0)" in html and "linear-gradient" in html
+    with pytest.raises(ValueError, match="same number of keys"):
+        with meshcat_scene.scene() as vis:
+            meshcat_scene.animate(vis, {"a": np.tile(np.eye(4), (2, 1, 1)), "b": np.tile(np.eye(4), (3, 1, 1))})

@@ -92,8 +92,11 @@ def plot_overlay(ax, segment: np.ndarray, overlay, speed: float, length: float =
     """Fig. 3(b): the first ``length`` metres of a nominal path and its Lissajous overlay
     (sampled at ``speed`` m/s), projected on the plane of the path's two main directions, mm."""
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(segment, axis=0), axis=1))])
-    nominal = segment[s <= length]
-    over = overlay.positions[overlay.t <= length / speed]
+    # both curves end at the same arc length (a nominal cut at its last waypoint would look short)
+    s_end = min(length, s[-1])
+    s_cut = np.append(s[s < s_end], s_end)
+    nominal = np.stack([np.interp(s_cut, s, segment[:, k]) for k in range(3)], axis=1)
+    over = overlay.positions[overlay.t <= s_end / speed]
     centre = nominal.mean(axis=0)
     _, _, vt = np.linalg.svd(over - centre, full_matrices=False)
     for pts, style in ((over, dict(color="tab:red", lw=0.8)), (nominal, dict(color="k", lw=1.5))):

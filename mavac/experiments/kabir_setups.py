@@ -17,6 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib import patheffects
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from ..geometry.parts import load_part
@@ -32,7 +35,7 @@ from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_
                             reach_targets_from_part)
 from ..setups.sampling import (VARIANTS, gradient_descent, hierarchical_sampling, random_sampling,
                                uniform_setups, variant_plan)
-from ..viz.plots import new_figure, plot_mesh
+from ..viz.plots import discrete_colorbar, new_figure, plot_mesh
 
 #: Kabir Fig. 6 / Tables II-VI objects, in the paper's order.
 OBJECTS = ("sine", "schwefel", "concave_bowl", "hyperboloid")
@@ -267,6 +270,40 @@ def random_runs(baselines: dict, space: SetupSpaceParams, sampling: SamplingPara
     return pd.DataFrame([r for chunk in rows for r in chunk])
 
 
+def exhaustion_diagnosis(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams,
+                         variant: str = "CA_XY", seed: int = 0) -> dict:
+    """Why a random-sampling run exhausts the grid (Fig. 7): the patches it never covers, how
+    many grid setups reach each, and whether the seeds that reach them still do after the
+    conservative round and after the absolute round of the descent.
+
+    Returns
+    -------
+    dict
+        ``object, variant, seed, n_rfc, covers_target, missing_patches, grid_setups_reaching_min,
+        grid_setups_reaching_max, seeds_reaching_missing, kept_after_conservative,
+        kept_after_absolute``.
+    """
+    target = b.cover.any(axis=0)
+    reach = CountingReach(lookup_reach(b.setups, b.cover))
+    run = random_sampling(reach, space, sampling, variant=variant, seed=seed, target=target)
+    missing = np.flatnonzero(target & ~run.cover.any(axis=0))
+    counts = b.cover[:, missing].sum(axis=0)
+    seeds = np.flatnonzero(b.cover[:, missing].any(axis=1)) if len(missing) else np.zeros(0, dtype=np.int64)
+    kept = {"conservative": 0, "absolute": 0}
+    rounds, _ = variant_plan(variant)
+    for j in seeds:
+        g = gradient_descent(reach, b.setups[j], variant, space, sampling, seed_cover=b.cover[j])
+        had = b.cover[j, missing]
+        for name, end in zip(rounds, g.round_ends):
+            covered = reach(end[None])[0]
+            kept[name] += bool(covered[missing][had].all())
+    return dict(object=b.name, variant=variant, seed=seed, n_rfc=run.n_rfc, covers_target=run.covers_target,
+                missing_patches=len(missing), grid_setups_reaching_min=int(counts.min()) if len(counts) else 0,
+                grid_setups_reaching_max=int(counts.max()) if len(counts) else 0,
+                seeds_reaching_missing=len(seeds), kept_after_conservative=kept["conservative"],
+                kept_after_absolute=kept["absolute"] if "absolute" in rounds else None)
+
+
 def table4(runs: pd.DataFrame) -> pd.DataFrame:
     """Kabir Table IV: likelihood of finding the optimal setup count. Columns ``object, variant,
     p_optimal``."""
@@ -293,8 +330,8 @@ def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alp
              seed: int = 0, variant: str = "CA_XY") -> pd.DataFrame:
     """Gradient-descent paths from random x-y seeds at a fixed grid alpha (Kabir Fig. 8).
 
-    Columns ``path, step, x, y, alpha, covered, conservative_end, absolute_end`` (the last two
-    flag the setups where the conservative and the absolute round ended).
+    Columns ``path, step, x, y, alpha, covered, conservative_end, absolute_end, variant`` (the
+    two ``*_end`` flag the setups where the conservative and the absolute round ended).
     """
     reach = CountingReach(lookup_reach(b.setups, b.cover))
     _, _, _, a = landscape(b, space, alpha)
@@ -308,7 +345,7 @@ def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alp
         for step, (s, c) in enumerate(zip(g.path, g.path_scores)):
             rows.append(dict(path=k, step=step, x=s[0], y=s[1], alpha=s[2], covered=int(c),
                              conservative_end=ends.get("conservative") == step,
-                             absolute_end=ends.get("absolute") == step))
+                             absolute_end=ends.get("absolute") == step, variant=variant))
     return pd.DataFrame(rows)
 
 
@@ -405,18 +442,32 @@ def fig9(*, ms=(7, 12, 13, 20), prob: float = 0.9, n_repeat_grid=None) -> pd.Dat
 # ---------------------------------------------------------------- figures
 
 
+#: face colours of Fig. 6: clean, then 1, 2, 3 passes (darker red = more passes)
+PASS_COLORS = np.array([[0.78, 0.78, 0.82, 1.0], [1.0, 0.6, 0.6, 1.0], [0.95, 0.25, 0.25, 1.0], [0.7, 0.0, 0.0, 1.0]])
+PASS_LABELS = ("clean", "1 pass", "2 passes", "3 passes")
+
+
 def plot_objects(names=OBJECTS, seed: int = 0):
-    """Kabir Fig. 6: the four objects, stain in red (darker = more passes)."""
+    """Kabir Fig. 6: the four objects, stain in red (darker = more passes), with a colour bar."""
     fig, axes = new_figure(ncols=len(names), projection="3d", size=(4.5, 4.0))
     for ax, name in zip(np.atleast_1d(axes), names):
         part = load_part(name, seed=seed)
-        colors = np.tile([0.78, 0.78, 0.82, 1.0], (len(part.mesh.faces), 1))
-        shade = {1: [1.0, 0.6, 0.6, 1.0], 2: [0.95, 0.25, 0.25, 1.0], 3: [0.7, 0.0, 0.0, 1.0]}
-        colors[part.stain_faces] = [shade[int(p)] for p in part.passes]
-        plot_mesh(ax, part.mesh, face_colors=colors, alpha=1.0, max_faces=20000)
+        face_passes = np.zeros(len(part.mesh.faces), dtype=np.int64)
+        face_passes[part.stain_faces] = part.passes
+        plot_mesh(ax, part.mesh, face_colors=PASS_COLORS[face_passes], alpha=1.0, max_faces=20000)
         ext = part.mesh.extents
         ax.set_title(f"{name}\n{ext[0]:.2f} x {ext[1]:.2f} x {ext[2]:.2f} m, {len(part.stain_faces)} patches")
+    discrete_colorbar(fig, list(np.atleast_1d(axes)), PASS_COLORS, PASS_LABELS, "cleaning passes N_i",
+                      shrink=0.6, pad=0.02)
     return fig
+
+
+def contrast_setup(b: Baseline) -> np.ndarray:
+    """The grid setup that reaches closest to half of the patches some setup reaches: a reach
+    test picture with both reachable and unreachable patches in quantity."""
+    reached = b.cover.sum(axis=1)
+    target = b.cover.any(axis=0).sum() / 2
+    return b.setups[int(np.argmin(np.abs(reached - target)))]
 
 
 def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachParams):
@@ -447,33 +498,59 @@ def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachP
     return fig
 
 
-def plot_fig7(runs: pd.DataFrame):
-    """Kabir Fig. 7: n_rfc of the random-sampling runs per variant, one panel per object."""
+def plot_fig7(runs: pd.DataFrame, grid_size: int | None = None):
+    """Kabir Fig. 7: n_rfc of the random-sampling runs per variant, one panel per object.
+
+    Runs that never covered every coverable patch (``covers_target`` False) drew every setup of
+    the grid and stop at its size: they are drawn hatched, with the count of such runs above the
+    box, and the grid size (``grid_size``) as a dotted line.
+    """
     names = list(dict.fromkeys(runs.object))
-    fig, axes = new_figure(ncols=len(names), size=(4.0, 3.5))
+    fig, axes = new_figure(ncols=len(names), size=(4.0, 3.6))
     for ax, name in zip(np.atleast_1d(axes), names):
         sub = runs[runs.object == name]
         variants = list(dict.fromkeys(sub.variant))
-        ax.boxplot([sub[sub.variant == v].n_rfc.to_numpy() for v in variants], showfliers=True)
+        box = ax.boxplot([sub[sub.variant == v].n_rfc.to_numpy() for v in variants], showfliers=True,
+                         patch_artist=True)
+        for patch, v in zip(box["boxes"], variants):
+            failed = int((~sub[sub.variant == v].covers_target.astype(bool)).sum())
+            patch.set_facecolor("white")
+            if failed:
+                patch.set_hatch("////")
+                patch.set_edgecolor("tab:red")
+                top = sub[sub.variant == v].n_rfc.max()
+                ax.annotate(f"{failed}/{int((sub.variant == v).sum())}", (variants.index(v) + 1, top),
+                            textcoords="offset points", xytext=(0, 4), ha="center", fontsize=7, color="tab:red")
+        if grid_size:
+            ax.axhline(grid_size, color="grey", ls=":", lw=1)
         ax.set_xticks(range(1, len(variants) + 1), variants, rotation=60, fontsize=7)
         ax.set_title(name)
         ax.set_ylabel("n_rfc")
-    fig.tight_layout()
+    handles = [Patch(facecolor="white", edgecolor="k", label="runs covering every coverable patch"),
+               Patch(facecolor="white", edgecolor="tab:red", hatch="////",
+                     label="runs that exhausted the grid without covering it (count above)")]
+    if grid_size:
+
+        handles.append(Line2D([], [], color="grey", ls=":", label=f"grid size ({grid_size:,} setups)"))
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False, fontsize=8)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     return fig
 
 
 def plot_fig8(b: Baseline, space: SetupSpaceParams, paths: pd.DataFrame, alpha: float):
     """Kabir Fig. 8: coverage landscape over x-y at fixed alpha with gradient-descent paths
-    (black = seed, green = end of the conservative round, red = end of the absolute round)."""
+    (black = seed, green = end of the conservative round, red = end of the absolute round), with
+    the variant's name and a legend of the stars."""
     xs, ys, counts, a = landscape(b, space, alpha)
     n = paths.path.nunique()
     cols = min(4, n)
     fig, axes = new_figure(ncols=cols, nrows=math.ceil(n / cols), size=(3.6, 3.2))
     X, Y = np.meshgrid(xs, ys, indexing="ij")
+    outline = [patheffects.withStroke(linewidth=2.2, foreground="k")]
     for k, ax in zip(range(n), np.atleast_1d(axes)):
         cs = ax.contourf(X, Y, counts, levels=20, cmap="viridis")
         p = paths[paths.path == k].sort_values("step")
-        ax.plot(p.x, p.y, "w-", lw=1)
+        ax.plot(p.x, p.y, "w-", lw=1, path_effects=outline)
         ax.plot(p.x.iloc[0], p.y.iloc[0], "k*", ms=10)
         cons, absolute = p[p.conservative_end], p[p.absolute_end]
         ax.plot(cons.x, cons.y, "g*", ms=12)
@@ -482,9 +559,17 @@ def plot_fig8(b: Baseline, space: SetupSpaceParams, paths: pd.DataFrame, alpha: 
                      fontsize=8)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    fig.subplots_adjust(hspace=0.55, wspace=0.4)
-    fig.colorbar(cs, ax=list(np.atleast_1d(axes)), shrink=0.6, label="patches reached")
-    fig.suptitle(f"{b.name}, alpha = {math.degrees(a):.0f} deg")
+    fig.subplots_adjust(hspace=0.55, wspace=0.4, bottom=0.16)
+    fig.colorbar(cs, ax=list(np.atleast_1d(axes)), shrink=0.6, label="patches reached (absolute score)")
+    variant = paths["variant"].iloc[0] if "variant" in paths else "gradient descent"
+    fig.suptitle(f"{b.name}, alpha = {math.degrees(a):.0f} deg: {variant} paths; panel titles = patches at "
+                 "seed -> conservative end -> absolute end")
+    star = dict(marker="*", ls="", mec="k", mew=0.3)
+    fig.legend(handles=[Line2D([], [], color="k", ms=10, label="seed (random start)", **star),
+                        Line2D([], [], color="g", ms=12, label="end of the conservative round (Type I score)", **star),
+                        Line2D([], [], color="r", ms=8, label="end of the absolute round (Type II)", **star),
+                        Line2D([], [], color="w", lw=1, path_effects=outline, label="descent path")],
+               loc="lower center", ncol=4, frameon=False, fontsize=8)
     return fig
 
 
@@ -501,8 +586,9 @@ def plot_fig9(df: pd.DataFrame):
         axes[0, i].set_ylabel("N_repeat for p >= 0.9")
         bot = df[(df.m == m) & (df.panel == "probability_vs_n_repeat")]
         for q, g in bot.groupby("q"):
-            axes[1, i].semilogx(g.n_repeat, g.probability, lw=1)
+            axes[1, i].semilogx(g.n_repeat, g.probability, lw=1, label=f"q = {q}")
         axes[1, i].set_xlabel("N_repeat")
         axes[1, i].set_ylabel("probability")
+        axes[1, i].legend(fontsize=6, ncol=2, title="q = minimum cover size\n(q and m - q coincide)", title_fontsize=6, loc="lower right")
     fig.tight_layout()
     return fig

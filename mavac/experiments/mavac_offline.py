@@ -10,6 +10,8 @@ import dataclasses
 import functools
 
 import matplotlib.pyplot as plt
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 import numpy as np
 import pandas as pd
 
@@ -109,7 +111,7 @@ def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: in
 
 
 def table1_summary(trials_df: pd.DataFrame, with_machine: bool = False) -> pd.DataFrame:
-    """Means and standard deviations over trials: ``[machine,] visibility, P_s, trials, spots_mean,
+    """Means and standard deviations (ddof 1) over trials: ``[machine,] visibility, P_s, trials, spots_mean,
     spots_std, C_mean, C_std, O_mean, O_std, O_pairwise_mean, O_pairwise_std``."""
     keys = (["machine"] if with_machine else []) + ["visibility", "P_s"]
     g = trials_df.groupby(keys, sort=True)
@@ -499,10 +501,12 @@ def plot_table1(summary: pd.DataFrame, paper: pd.DataFrame | None = None):
     """Spots, C and O (eq. 2 and pairwise) against P_s, one line per visibility method, error bars
     one standard deviation over the trials; the paper's dashed."""
     fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
+    n = int(summary["trials"].min())
     styles = {"hpr": ("o-", "HPR"), "raycast": ("s-", "ray casting")}
     for method, d in summary.groupby("visibility", sort=False):
         marker, label = styles.get(method, ("o-", method))
-        axes[0].errorbar(d["P_s"], d["spots_mean"], d["spots_std"], fmt=marker, capsize=3, label=label)
+        axes[0].errorbar(d["P_s"], d["spots_mean"], d["spots_std"], fmt=marker, capsize=3,
+                         label=f"{label} (mean +- s.d., {n} trials)")
         axes[1].errorbar(d["P_s"], d["C_mean"], d["C_std"], fmt=marker, capsize=3, label=f"C, {label}")
         axes[2].errorbar(d["P_s"], d["O_mean"], d["O_std"], fmt=marker, capsize=3, label=f"O eq. 2, {label}")
         axes[2].errorbar(d["P_s"], d["O_pairwise_mean"], d["O_pairwise_std"], fmt=marker, capsize=3, alpha=0.6,
@@ -595,7 +599,8 @@ def plot_guard_view(plan, pose: int | None = None):
 
 
 def plot_nos_gateway(plan, cluster: int | None = None, ray_length: float = 0.6):
-    """MAVAC Fig. 4: the rays cast from a NoS cluster (red: blocked, green: best gateway)."""
+    """MAVAC Fig. 4: the rays cast from a NoS cluster (red: blocked, green: through the best gateway,
+    orange: through another gateway), with a legend."""
     cl = [c for c in plan.nos_clusters if c.best_gateway is not None]
     if not cl:
         raise ValueError("the plan has no NoS cluster with a gateway")
@@ -603,11 +608,19 @@ def plot_nos_gateway(plan, cluster: int | None = None, ray_length: float = 0.6):
     fig, ax = _mesh_axes(plan.mesh)
     ax.scatter(*plan.points[c.members].T, s=5, c="tab:blue", label=f"NoS cluster {c.label} ({len(c.members)})")
     o = c.origin
-    for d, esc, t in zip(c.directions, c.escaping, c.hit_distance):
-        if not esc:  # blocked rays end where they hit the machine or the floor
-            ax.plot(*np.column_stack([o, o + min(t, ray_length) * d]), color="red", lw=0.3, alpha=0.4)
-    for d in c.best_gateway.ray_directions:
-        ax.plot(*np.column_stack([o, o + ray_length * d]), color="green", lw=0.8)
+    ax.scatter(*o, s=40, c="k", marker="x", label="cluster centre (ray origin)")
+    blocked = np.flatnonzero(~c.escaping)
+    for k, i in enumerate(blocked):  # blocked rays end where they hit the machine or the floor
+        ax.plot(*np.column_stack([o, o + min(c.hit_distance[i], ray_length) * c.directions[i]]), color="red",
+                lw=0.3, alpha=0.4, label=f"blocked ray ({len(blocked)})" if k == 0 else None)
+    for k, d in enumerate(c.best_gateway.ray_directions):
+        ax.plot(*np.column_stack([o, o + ray_length * d]), color="green", lw=0.8,
+                label=f"ray through the best gateway ({c.best_gateway.n_rays})" if k == 0 else None)
+    best = np.isclose(c.directions[:, None, :], c.best_gateway.ray_directions[None]).all(axis=2).any(axis=1)
+    others = np.flatnonzero(c.escaping & ~best)
+    for k, i in enumerate(others):
+        ax.plot(*np.column_stack([o, o + ray_length * c.directions[i]]), color="orange", lw=0.5,
+                label=f"escaping ray, another gateway ({len(others)})" if k == 0 else None)
     ax.set_title(f"NoS cluster {c.label}: {c.escaping.sum()} escaping rays, "
                  f"{len(c.gateways)} gateway(s), best {c.best_gateway.n_rays} rays")
     ax.legend(loc="upper left")
@@ -628,9 +641,17 @@ def plot_spots(ctx, P_s_values=(0.02, 0.15)):
         ax.quiver(s[:, 0], s[:, 1], np.cos(s[:, 2]), np.sin(s[:, 2]), color="tab:blue", scale=12, width=0.008)
         for i, (x, y, _) in enumerate(s):
             ax.annotate(str(i + 1), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        visibility = ctx.params.spot.visibility
         ax.set(aspect="equal", xlabel="x [m]", ylabel="y [m]",
-               title=f"P_s = {P_s}: {len(s)} spots, C = {sel.C:.2f}, O = {sel.O:.2f} ({ctx.params.spot.visibility})")
-    fig.tight_layout()
+               title=f"P_s = {P_s}: {len(s)} spots, C = {sel.C:.2f}, O = {sel.O:.2f} ({visibility})")
+
+    handles = [Patch(color="0.8", label="machine footprint"),
+               Line2D([], [], color="0.6", marker=r"$\rightarrow$", ls="", ms=10,
+                      label=f"candidate spot ({len(ctx.candidates)}), arrow = heading"),
+               Line2D([], [], color="tab:blue", marker=r"$\rightarrow$", ls="", ms=12,
+                      label="chosen spot, numbered in selection order")]
+    fig.legend(handles=handles, loc="lower center", ncol=3, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     return fig
 
 

@@ -3,13 +3,21 @@
 ``load_mesh`` is the entry point for people who bring their own machine or part (MAVAC assumes
 "at least a coarse representation of the machine", e.g. from photogrammetry). CAD exports are
 often in millimetres or inches and contain degenerate or duplicated triangles; we convert,
-repair what is safe to repair, and say what we did (``warnings.warn`` and
-``mesh.metadata["mavac_repairs"]``).
+check the size against what the object is (a machine or a part), repair what is safe to
+repair, and say what we did (``warnings.warn`` and ``mesh.metadata["mavac_repairs"]``).
+
+Size check. A unit mistake changes the size by a factor of 10-1000, so it is caught by the
+size range of the object's role: a machine is about 0.3 m to 5 m across (MAVAC's test bench is
+2 m, a wide-belt sander or bench mill about 1-1.5 m), a part about 2 cm to 2 m (Kabir's parts
+run from a 20 cm ship hull to a 1.6 m sine surface). "Across" is the largest side of the
+bounding box. Outside the range the file is refused, and the message names every unit under
+which it would fall in range.
 """
 
 from __future__ import annotations
 
 import warnings
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -20,21 +28,55 @@ UNIT_SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 UNIT_WORDS = {"m": "metres", "cm": "centimetres", "mm": "millimetres", "in": "inches"}
 #: file types handed to trimesh's loaders
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".dae")
-#: plausible size (bounding-box diagonal) of a machine or part, metres
-MIN_SIZE = 1e-3
-MAX_SIZE = 100.0
+#: plausible size (largest bounding-box side, metres) of each role; ``None`` accepts either
+ROLE_SIZES = {"machine": (0.3, 5.0), "part": (0.02, 2.0), None: (0.02, 5.0)}
+ROLE_WORDS = {"machine": "a machine", "part": "a part", None: "a machine or a part"}
 
 
-def _suggest_unit(diagonal_in_file_units: float) -> str | None:
-    """The unit that makes the mesh a plausible size, closest to 1 m across."""
-    best, best_score = None, np.inf
-    for unit, scale in UNIT_SCALE.items():
-        size = diagonal_in_file_units * scale
-        if MIN_SIZE <= size <= MAX_SIZE:
-            score = abs(np.log10(size))
-            if score < best_score:
-                best, best_score = unit, score
-    return best
+def _size_range(role) -> tuple[float, float]:
+    if role not in ROLE_SIZES:
+        raise ValueError(f"role must be 'machine', 'part' or None, got {role!r}")
+    return ROLE_SIZES[role]
+
+
+def units_in_range(extent_in_file_units: float, role=None) -> list[str]:
+    """Units under which a mesh whose largest side is ``extent_in_file_units`` fits ``role``.
+
+    Parameters
+    ----------
+    extent_in_file_units : float
+        Largest bounding-box side, in the file's own numbers.
+    role : {"machine", "part", None}
+
+    Returns
+    -------
+    list of str
+        Keys of :data:`UNIT_SCALE`, largest unit first.
+    """
+    lo, hi = _size_range(role)
+    return [u for u, s in UNIT_SCALE.items() if lo <= extent_in_file_units * s <= hi]
+
+
+def collada_unit(path) -> float | None:
+    """Metres per unit declared by a COLLADA file's ``<asset><unit meter="..."/>``, or None."""
+    try:
+        for _, elem in ET.iterparse(str(path), events=("start",)):
+            tag = elem.tag.rsplit("}", 1)[-1]
+            if tag == "unit" and elem.get("meter") is not None:
+                meter = float(elem.get("meter"))
+                return meter if np.isfinite(meter) and meter > 0 else None
+            if tag in ("library_geometries", "library_visual_scenes"):
+                return None  # <asset> comes first; stop before the bulk of the file
+    except (ET.ParseError, ValueError):
+        return None
+    return None
+
+
+def _unit_name(scale: float) -> str:
+    for unit, s in UNIT_SCALE.items():
+        if np.isclose(scale, s, rtol=1e-9):
+            return unit
+    return f"{scale:g} m"
 
 
 def _read(path: Path) -> trimesh.Trimesh:
@@ -48,14 +90,50 @@ def _read(path: Path) -> trimesh.Trimesh:
     return loaded
 
 
+def _colors(mesh: trimesh.Trimesh) -> dict:
+    """Per-vertex or per-face colours stored in the file (a stain can be painted on), if any."""
+    kind = getattr(mesh.visual, "kind", None)
+    if kind == "vertex":
+        return {"vertex_colors": np.asarray(mesh.visual.vertex_colors)}
+    if kind == "face":
+        return {"face_colors": np.asarray(mesh.visual.face_colors)}
+    return {}
+
+
+def _keep_majority_orientation(mesh: trimesh.Trimesh, before: np.ndarray) -> np.ndarray:
+    """After ``fix_winding``: in each connected sheet whose faces were mostly flipped, flip the
+    sheet back, so the author's orientation survives where most faces agreed with it.
+
+    Returns the (n,) bool mask of faces whose orientation differs from ``before``.
+    """
+    faces = np.asarray(mesh.faces)
+    flipped = np.any(faces != before, axis=1)
+    if not flipped.any():
+        return flipped
+    labels = np.zeros(len(faces), dtype=np.int64)
+    for k, comp in enumerate(trimesh.graph.connected_components(mesh.face_adjacency,
+                                                                 nodes=np.arange(len(faces)))):
+        labels[comp] = k
+    area = np.asarray(mesh.area_faces)
+    share = np.bincount(labels, area * flipped) / np.maximum(np.bincount(labels, area), 1e-300)
+    back = share[labels] > 0.5
+    if back.any():
+        new = faces.copy()
+        new[back] = new[back][:, ::-1]
+        mesh.faces = new
+        flipped = np.any(np.asarray(mesh.faces) != before, axis=1)
+    return flipped
+
+
 def repair_mesh(mesh: trimesh.Trimesh) -> dict:
     """Remove degenerate and duplicate faces, merge coincident vertices, drop unused ones,
     make the winding consistent.
 
     Works in place on ``mesh``. Returns the counts ``{"degenerate_faces", "duplicate_faces",
-    "merged_vertices", "unreferenced_vertices", "rewound_faces", "inverted"}``;
-    ``rewound_faces`` were flipped to agree with their neighbours, ``inverted`` is True when a
-    closed mesh was inside out and has been flipped so its normals point outward.
+    "merged_vertices", "unreferenced_vertices", "flipped_faces", "inverted"}``.
+    ``flipped_faces`` were turned over (not removed) to agree with their neighbours; in each
+    connected sheet the orientation most of its area already had is kept. ``inverted`` is True
+    when a closed mesh was inside out and has been turned so its normals point outward.
     """
     n_vertices = len(mesh.vertices)
     mesh.merge_vertices()
@@ -69,57 +147,116 @@ def repair_mesh(mesh: trimesh.Trimesh) -> dict:
     n_vertices = len(mesh.vertices)
     mesh.remove_unreferenced_vertices()
     unreferenced = n_vertices - len(mesh.vertices)
-    inverted, rewound = False, 0
+    inverted, flipped = False, 0
     if len(mesh.faces):
         before = np.array(mesh.faces)
         trimesh.repair.fix_winding(mesh)
-        rewound = int(np.any(np.asarray(mesh.faces) != before, axis=1).sum())
+        flipped = int(_keep_majority_orientation(mesh, before).sum())
         if mesh.is_watertight and mesh.volume < 0:
             mesh.invert()
             inverted = True
     return {"degenerate_faces": degenerate, "duplicate_faces": duplicate,
             "merged_vertices": merged, "unreferenced_vertices": unreferenced,
-            "rewound_faces": rewound, "inverted": inverted}
+            "flipped_faces": flipped, "inverted": inverted}
 
 
-def load_mesh(path, units: str = "m") -> trimesh.Trimesh:
+def _resolve_units(path: Path, units):
+    """Metres per unit and its name; COLLADA's own unit when ``units`` is None."""
+    declared = collada_unit(path) if path.suffix.lower() == ".dae" else None
+    if units is None:
+        scale = 1.0 if declared is None else declared
+        return scale, _unit_name(scale)
+    if units not in UNIT_SCALE:
+        raise ValueError(f"units must be one of {sorted(UNIT_SCALE)} (or None), got {units!r}")
+    if declared is not None and not np.isclose(declared, UNIT_SCALE[units], rtol=1e-6):
+        warnings.warn(f"{path.name} declares <unit meter=\"{declared:g}\"> ({_unit_name(declared)}) but "
+                      f"units='{units}' was passed; reading it in '{units}' as asked (pass units=None to "
+                      "use the file's unit)", stacklevel=3)
+    return UNIT_SCALE[units], units
+
+
+def _check_size(path: Path, extent_file: float, scale: float, unit: str, role) -> None:
+    lo, hi = _size_range(role)
+    size = extent_file * scale
+    if lo <= size <= hi:
+        return
+    fits = [u for u in units_in_range(extent_file, role) if u != unit]
+    range_text = f"{ROLE_WORDS[role]} is expected to be {lo:g} m to {hi:g} m across"
+    if fits:
+        options = " or ".join(f"units='{u}' ({extent_file * UNIT_SCALE[u]:.3g} m)" for u in fits)
+        hint = f"if the file is in {UNIT_WORDS[fits[0]]}, pass {options}" if len(fits) == 1 else \
+            f"pass the file's unit: {options}"
+    else:
+        hint = "no unit (m, cm, mm, in) brings it into that range; check the export"
+    raise ValueError(f"{path.name}: mesh is {size:.4g} m across after reading it in '{unit}', but "
+                     f"{range_text}; {hint}")
+
+
+def _warn_repairs(name: str, repairs: dict) -> None:
+    removed = {k: repairs[k] for k in ("degenerate_faces", "duplicate_faces") if repairs[k]}
+    if removed:
+        warnings.warn(f"{name}: removed " + ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in removed.items()),
+                      stacklevel=3)
+    if repairs["flipped_faces"]:
+        what = (f"{name}: flipped {repairs['flipped_faces']} faces (turned over, not removed) so every face "
+                "agrees with its neighbours")
+        if not repairs["watertight"]:
+            what += ("; the mesh is open, so which side is 'outward' was taken from the majority of each "
+                     "sheet: normals-based stain selection (e.g. a normal cone 'up:30') uses these normals")
+        warnings.warn(what, stacklevel=3)
+    if repairs["inverted"]:
+        warnings.warn(f"{name}: closed mesh was inside out; turned all its faces so normals point outward",
+                      stacklevel=3)
+    if not repairs["watertight"]:
+        warnings.warn(f"{name}: mesh is not watertight (open boundary or non-manifold edges); accepted, but "
+                      "inside/outside tests on it are unreliable", stacklevel=3)
+
+
+def load_mesh(path, units: str | None = None, *, role: str | None = None) -> trimesh.Trimesh:
     """Read an STL, OBJ, PLY or DAE file as one triangle mesh in metres.
 
     Parameters
     ----------
     path : str or Path
         Mesh file; a file with several bodies is concatenated into one mesh.
-    units : {"m", "cm", "mm", "in"}
-        Unit of the coordinates in the file; the result is always in metres.
+    units : {"m", "cm", "mm", "in"} or None
+        Unit of the coordinates in the file; the result is always in metres. None: the unit a
+        COLLADA file declares (``<unit meter=...>``), metres for every other file.
+    role : {"machine", "part"} or None
+        What the mesh is; sets the plausible size (largest bounding-box side): a machine 0.3-5 m,
+        a part 0.02-2 m, None either (0.02-5 m).
 
     Returns
     -------
     trimesh.Trimesh
         Repaired mesh in metres. ``mesh.metadata["mavac_repairs"]`` holds the repair counts
         (see :func:`repair_mesh`) and ``"watertight"``; ``mesh.metadata["mavac_units"]`` the
-        unit read.
+        unit read and ``"mavac_scale"`` its metres per unit. Per-vertex or per-face colours in
+        the file are kept (``mesh.visual``), e.g. for :func:`mavac.geometry.stain_marking.faces_from_colors`.
 
     Raises
     ------
     ValueError
-        Unknown ``units``; missing file or unsupported type; a file with no faces; NaN or
-        infinite coordinates; a size implausible for ``units`` (bounding-box diagonal outside
-        [1 mm, 100 m] after conversion; the message names the unit that would fit).
+        Unknown ``units`` or ``role``; missing file or unsupported type; a file with no faces;
+        NaN or infinite coordinates; a size outside the role's range (the message names the
+        units under which the file would be in range).
 
     Warns
     -----
     UserWarning
-        When faces were removed or rewound, when a closed mesh was inside out, and when it is
-        not watertight (accepted: coarse scans often have holes).
+        When faces were removed or flipped (on an open mesh: that normals-based stain
+        selection is affected), when a closed mesh was inside out, when it is not watertight
+        (accepted: coarse scans often have holes), and when a COLLADA file declares a unit
+        other than ``units``.
     """
-    if units not in UNIT_SCALE:
-        raise ValueError(f"units must be one of {sorted(UNIT_SCALE)}, got {units!r}")
+    _size_range(role)
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"path {str(path)!r} does not exist or is not a file")
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise ValueError(f"path {str(path)!r}: unsupported file type {path.suffix!r}; "
                          f"use one of {', '.join(MESH_SUFFIXES)}")
+    scale, unit = _resolve_units(path, units)
     mesh = _read(path)
     if len(mesh.faces) == 0 or len(mesh.vertices) == 0:
         raise ValueError(f"mesh in {str(path)!r} is empty (no faces); export the surface again")
@@ -128,32 +265,12 @@ def load_mesh(path, units: str = "m") -> trimesh.Trimesh:
         bad = int((~np.isfinite(vertices)).any(axis=1).sum())
         raise ValueError(f"mesh in {str(path)!r} has {bad} vertices with NaN or infinite "
                          "coordinates; repair the file in the exporting tool")
-    diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0)))
-    size = diagonal * UNIT_SCALE[units]
-    if not MIN_SIZE <= size <= MAX_SIZE:
-        fit = _suggest_unit(diagonal)
-        hint = (f"if the file is in {UNIT_WORDS[fit]} pass units='{fit}'" if fit and fit != units
-                else f"expected between {MIN_SIZE * 1000:g} mm and {MAX_SIZE:g} m")
-        raise ValueError(f"mesh is {size:.4g} m across after reading it in '{units}'; {hint}")
-    mesh = trimesh.Trimesh(vertices * UNIT_SCALE[units], np.asarray(mesh.faces), process=False)
+    _check_size(path, float(np.ptp(vertices, axis=0).max()), scale, unit, role)
+    mesh = trimesh.Trimesh(vertices * scale, np.asarray(mesh.faces), process=False, **_colors(mesh))
     repairs = repair_mesh(mesh)
     if len(mesh.faces) == 0:
         raise ValueError(f"mesh in {str(path)!r} has only degenerate faces; export it again")
     repairs["watertight"] = bool(mesh.is_watertight)
-    mesh.metadata["mavac_repairs"] = repairs
-    mesh.metadata["mavac_units"] = units
-    mesh.metadata["file_path"] = str(path)
-    fixed = {k: repairs[k] for k in ("degenerate_faces", "duplicate_faces", "rewound_faces")
-             if repairs[k]}
-    if fixed:
-        warnings.warn(f"{path.name}: removed " + ", ".join(f"{v} {k.replace('_', ' ')}"
-                                                           for k, v in fixed.items()),
-                      stacklevel=2)
-    if repairs["inverted"]:
-        warnings.warn(f"{path.name}: closed mesh was inside out; flipped its normals outward",
-                      stacklevel=2)
-    if not repairs["watertight"]:
-        warnings.warn(f"{path.name}: mesh is not watertight (open boundary or non-manifold "
-                      "edges); accepted, but inside/outside tests on it are unreliable",
-                      stacklevel=2)
+    mesh.metadata.update(mavac_repairs=repairs, mavac_units=unit, mavac_scale=scale, file_path=str(path))
+    _warn_repairs(path.name, repairs)
     return mesh

@@ -16,6 +16,9 @@ import trimesh
 
 from ..validate import check_int, check_positive
 
+#: most points :func:`sample_surface` makes (about 100 MB of Poisson-disk work)
+MAX_POINTS = 2_000_000
+
 
 @dataclass(frozen=True)
 class SurfacePoints:
@@ -66,12 +69,16 @@ def sample_surface(mesh: trimesh.Trimesh, spacing: float, seed: int = 0) -> Surf
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ValueError("mesh must be a trimesh.Trimesh with at least one face")
     count = int(round(mesh.area / spacing**2))
-    if count < 1:
-        raise ValueError(f"spacing={spacing} m is larger than the mesh itself "
-                         f"(area {mesh.area:.3g} m^2); pass a smaller spacing")
-    if count > 2_000_000:
-        raise ValueError(f"spacing={spacing} m would give {count} points on "
-                         f"{mesh.area:.3g} m^2; pass a larger spacing")
+    if count < 1 or count > MAX_POINTS:
+        across = float(np.ptp(np.asarray(mesh.vertices), axis=0).max())
+        units = (f"; the mesh is {across:.3g} m across: if it is really "
+                 f"{'larger' if count < 1 else 'smaller'}, it was read in the wrong units "
+                 "(load_mesh(path, units=...))")
+        if count < 1:
+            raise ValueError(f"spacing={spacing} m is larger than the mesh itself "
+                             f"(area {mesh.area:.3g} m^2); pass a smaller spacing{units}")
+        raise ValueError(f"spacing={spacing} m would give {count:,} points on "
+                         f"{mesh.area:.3g} m^2 (at most {MAX_POINTS:,}); pass a larger spacing{units}")
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces, dtype=np.int32)
     o3d_mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices),

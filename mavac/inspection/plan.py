@@ -37,13 +37,14 @@ from ..io import write_json
 from ..params import InspectionParams
 from ..robots.collision import CollisionChecker
 from ..robots.kinematics import maneuverability
-from ..robots.models import load_robot, ur10_mobile
+from ..robots.models import ur10_mobile
 from ..tolerances import TOUR_GAIN_TOL
 from ..vision.visibility import VisibilityScene
-from ..viz import meshcat_scene as ms
+from ..viz.scenes import inspection_plan_html
 from . import guards as G
 from . import spots as SP
 from .coverage import cover_counts, coverage_overlap
+from .diagnose import LOW_COVERAGE, coverage_message, unobserved_causes
 from .nos import nos_guards, raycasting_scene
 from .reachability import reachability_map
 from .spots import SpotSelection
@@ -237,6 +238,20 @@ class InspectionPlan:
         return int(np.count_nonzero(self.pose_kind == "nos"))
 
     @property
+    def visibility(self) -> str:
+        """Visibility method behind C and O: ``"raycast"``, ``"hpr"``, or both named per stage."""
+        return self.params.visibility
+
+    def summary(self) -> str:
+        """A few lines a person can read; every coverage names its visibility method."""
+        lines = [f"{self.machine_name}: C = {self.C:.3f}, O = {self.O:.3f} ({self.visibility} visibility) over "
+                 f"|S| = {len(self.points)} surface elements ({self.params.surface_spacing:g} m apart); "
+                 f"{self.n_spots} spots, {self.n_guards} guards, {self.n_nos_guards} NoS guards ({self.robot_name})",
+                 f"  guards only: C = {self.C_guards:.3f}, O = {self.O_guards:.3f} ({self.visibility} visibility)"]
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    @property
     def observed(self) -> np.ndarray:
         """(n,) bool: elements seen by at least one pose of T."""
         return cover_counts(self.visible) > 0 if len(self.visible) else np.zeros(len(self.points), bool)
@@ -254,6 +269,7 @@ class InspectionPlan:
             "robot": self.robot_name,
             "params": dataclasses.asdict(self.params),
             "n_elements": int(len(self.points)),
+            "visibility": self.visibility,
             "C": self.C, "O": self.O, "C_guards": self.C_guards, "O_guards": self.O_guards,
             "spots": [{"x": float(x), "y": float(y), "theta": float(t)} for x, y, t in self.spots],
             "poses": [
@@ -281,37 +297,11 @@ class InspectionPlan:
         return write_json(self.to_dict(timings=timings), path)
 
     def to_html(self, path, robot=None):
-        """Static meshcat HTML: machine, observed (green) / unobserved (red) elements, spots,
-        camera poses (guards blue, NoS guards orange) with lines to their targets, best gateways,
-        and the robot at the first spot in its home configuration.
-        """
-        robot = load_robot(self.robot_name) if robot is None else robot
-        world_T_spots = se2_matrices(self.spots) if len(self.spots) else np.zeros((0, 4, 4))
-        with ms.scene() as vis:
-            if self.mesh is not None:
-                ms.add_mesh(vis, "machine", self.mesh, color=(0.75, 0.75, 0.78), opacity=0.8)
-            colors = np.where(self.observed[:, None], [[0.1, 0.7, 0.2]], [[0.9, 0.1, 0.1]])
-            ms.add_points(vis, "surface", self.points, colors, size=0.02)
-            for i, T in enumerate(world_T_spots):
-                ms.add_triad(vis, f"spots/{i}", T, length=0.3)
-            for i, T in enumerate(self.world_T_camera):
-                ms.add_triad(vis, f"cameras/{self.pose_kind[i]}_{i}", T, length=0.08)
-            guard = self.pose_kind == "guard"
-            if guard.any():
-                ms.add_lines(vis, "guard_rays", self.world_T_camera[guard, :3, 3],
-                             self.points[self.pose_target[guard]], color=(0.1, 0.3, 0.9))
-            nos = self.pose_kind == "nos"
-            if nos.any():
-                ms.add_points(vis, "nos_cameras", self.world_T_camera[nos, :3, 3], (1.0, 0.5, 0.0), size=0.06)
-            for c in self.nos_clusters:
-                g = c.best_gateway
-                if g is not None:
-                    ends = g.origin + 0.5 * g.ray_directions
-                    ms.add_lines(vis, f"gateways/{c.label}", np.broadcast_to(g.origin, ends.shape), ends,
-                                 color=(0.1, 0.8, 0.1))
-            if len(self.spots):
-                ms.add_robot(vis, "robot", robot, robot.q_home, world_T_base=world_T_spots[0])
-            return ms.save_html(vis, path)
+        """Static meshcat HTML that frames the machine: observed (green) / unobserved (red)
+        elements, spots, camera poses, the robot animated through T, a colour legend; the
+        guard rays and gateways are layers hidden by default (see
+        :func:`mavac.viz.scenes.inspection_plan_html`)."""
+        return inspection_plan_html(self, path, robot=robot)
 
 
 @contextlib.contextmanager
@@ -605,6 +595,23 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
     -------
     InspectionPlan
         Empty (no spots, C = 0, with a warning) when no candidate spot can access anything.
+
+    Warns
+    -----
+    UserWarning
+        When C is below :data:`mavac.inspection.diagnose.LOW_COVERAGE`, with how many elements
+        are too high, too far or occluded (also in ``plan.warnings``).
     """
     ctx = prepare_offline(mesh_or_machine, robot=robot, params=params, rmap=rmap)
-    return plan_from_context(ctx, progress=progress)
+    plan = plan_from_context(ctx, progress=progress)
+    warn_low_coverage(ctx, plan, rmap=rmap)
+    return plan
+
+
+def warn_low_coverage(ctx: OfflineContext, plan: InspectionPlan, rmap=None) -> None:
+    """Append (and warn) the low-coverage message of :mod:`mavac.inspection.diagnose`, if any."""
+    if plan.C >= LOW_COVERAGE:
+        return
+    message = coverage_message(plan.C, unobserved_causes(ctx, plan, rmap=rmap), plan.visibility)
+    plan.warnings.append(message)
+    warnings.warn(message, stacklevel=3)

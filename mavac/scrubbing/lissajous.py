@@ -145,3 +145,37 @@ def overlay_path(path, frames, params: LissajousParams = LissajousParams(), *, s
     positions = nominal + np.einsum("nij,nj->ni", R, offset_tool)
     forces = np.einsum("nij,nj->ni", R, force_tool)
     return Overlay(t, positions, forces)
+
+
+def end_overshoot(path, positions) -> tuple[float, float]:
+    """How far an overlaid trajectory runs past the start and the end of its nominal path, metres.
+
+    Measured along the path's direction of travel at each end: a point before the start (behind
+    the first waypoint) or past the end (beyond the last) counts. The force oscillation is
+    overlaid on the nominal trajectory (Kabir Sec. VIII), so on a straight end the tool swings past
+    it by at most ``A_x / kappa_x`` (its x axis is the travel direction); where the path turns, part
+    of the across-path swing ``A_y / kappa_y`` points past the end too, and the bound is
+    ``hypot(A_x / kappa_x, A_y / kappa_y)``.
+
+    Parameters
+    ----------
+    path : (n, 3) float
+        Nominal waypoints, n >= 2.
+    positions : (m, 3) float
+        Overlaid trajectory (e.g. :attr:`Overlay.positions`).
+
+    Returns
+    -------
+    (before_start, past_end) : float, metres (0 when the overlay stays within the ends)
+    """
+    path = check_points("path", path, 3)
+    pos = check_points("positions", positions, 3)
+    if len(path) < 2:
+        raise ValueError(f"path must have at least 2 waypoints, got {len(path)}")
+    start_dir = path[1] - path[0]
+    end_dir = path[-1] - path[-2]
+    start_dir /= np.linalg.norm(start_dir)
+    end_dir /= np.linalg.norm(end_dir)
+    before = float(np.max((path[0] - pos) @ start_dir, initial=0.0))
+    past = float(np.max((pos - path[-1]) @ end_dir, initial=0.0))
+    return max(before, 0.0), max(past, 0.0)

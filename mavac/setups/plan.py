@@ -11,15 +11,24 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+import warnings as _warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..geometry.stain_marking import oversized_patches
+from ..io import write_json
 from ..params import SetupPlanParams
-from ..planning.setcover import execution_time_area_passes, setup_costs_from_times, solve_setup_cover
+from ..planning.setcover import (
+    execution_time_area_passes,
+    setup_costs_from_times,
+    solve_setup_cover,
+)
 from ..robots.models import puma560
+from .diagnose import unreachable_causes, unreachable_message
 from .reach import CountingReach, PartReach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
+from .viewer import setup_plan_html
 
 
 @dataclass
@@ -52,16 +61,21 @@ class SetupPlan:
     nondominated : int
         Candidates left after dominance elimination (the planner's input).
     certificate_cost : float or None
-        MILP optimum of the same instance.
+        MILP optimum of the same instance; None when there is no solution (or the MILP did
+        not run).
     certificate_gap : float or None
         ``(cost - certificate_cost) / certificate_cost``; 0 means the plan is proven optimal
-        over the candidates.
+        over the candidates; None without a certificate.
     status : str
         The planner's status ("optimal", "timed_out", "no_solution", "empty").
     uncoverable : (u,) int
         Patches no candidate setup reaches (not in the plan).
     seconds : float
         Wall time of the whole call.
+    uncoverable_causes : (u,) str
+        Likely cause for each uncoverable patch (:data:`mavac.setups.diagnose.CAUSES`).
+    warnings : list of str
+        What the user should know: unreachable share of the stain and why, oversized patches.
     """
 
     part_name: str
@@ -81,20 +95,57 @@ class SetupPlan:
     status: str
     uncoverable: np.ndarray
     seconds: float
+    uncoverable_causes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U18"))
+    warnings: list = field(default_factory=list)
+
+    def to_dict(self, timings: bool = False) -> dict:
+        """Plain-JSON description: setups in order with their patches, costs, certificate, warnings.
+
+        Wall time is left out unless asked for, so the same seed gives the same file.
+        """
+        out = {
+            "part": self.part_name, "status": self.status,
+            "cost_s": float(self.cost), "setup_time_s": float(self.setup_time_total),
+            "execution_time_s": float(self.execution_time_total),
+            "certificate_cost_s": None if self.certificate_cost is None else float(self.certificate_cost),
+            "certificate_gap": None if self.certificate_gap is None else float(self.certificate_gap),
+            "n_rfc": int(self.n_rfc), "candidates": int(self.candidates), "nondominated": int(self.nondominated),
+            "node_expansions": int(self.node_expansions),
+            "setups": [{"x": float(s[0]), "y": float(s[1]), "alpha": float(s[2]), "step_cost_s": float(c),
+                        "patches": [int(i) for i in p], "reachable": [int(i) for i in r]}
+                       for s, c, p, r in zip(self.setups, self.step_costs, self.patches, self.reachable)],
+            "uncoverable": [int(i) for i in self.uncoverable],
+            "uncoverable_causes": [str(c) for c in self.uncoverable_causes],
+            "warnings": list(self.warnings),
+        }
+        if timings:
+            out["seconds"] = float(self.seconds)
+        return out
+
+    def to_json(self, path, timings: bool = False):
+        """Write :meth:`to_dict` atomically as JSON."""
+        return write_json(self.to_dict(timings=timings), path)
+
+    def to_html(self, path, part, robot=None, params=None):
+        """Meshcat page of the plan on ``part`` (:func:`mavac.setups.viewer.setup_plan_html`)."""
+        return setup_plan_html(self, part, path, robot=robot, params=params)
 
     def summary(self) -> str:
         """A few lines a person can read."""
-        lines = [f"{self.part_name}: {len(self.setups)} setups, T = {self.cost:.1f} s "
-                 f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "
-                 f"status {self.status}, n_rfc {self.n_rfc}, {self.nondominated} non-dominated of "
-                 f"{self.candidates} candidates, {self.node_expansions} DFBnB nodes"]
-        if self.certificate_gap is not None:
+        if self.status == "no_solution":
+            lines = [f"{self.part_name}: NO SOLUTION: none of {self.candidates} candidate setups reaches any "
+                     f"stain patch (n_rfc {self.n_rfc}); no plan, no cost, no certificate"]
+        else:
+            lines = [f"{self.part_name}: {len(self.setups)} setups, T = {self.cost:.1f} s "
+                     f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "
+                     f"status {self.status}, n_rfc {self.n_rfc}, {self.nondominated} non-dominated of "
+                     f"{self.candidates} candidates, {self.node_expansions} DFBnB nodes"]
+        if self.certificate_gap is not None and self.certificate_cost is not None:
             lines.append(f"  MILP optimum {self.certificate_cost:.1f} s, gap {100 * self.certificate_gap:.2f} %")
         for j, (s, p) in enumerate(zip(self.setups, self.patches)):
             lines.append(f"  setup {j + 1}: x = {s[0]:.3f} m, y = {s[1]:.3f} m, "
                          f"alpha = {math.degrees(s[2]):.1f} deg, {len(p)} patches")
-        if len(self.uncoverable):
-            lines.append(f"  {len(self.uncoverable)} patches no setup reaches")
+        lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
 
@@ -138,6 +189,7 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
                          f"length, got {n}, {len(normals)}, {len(area)}, {len(passes)}")
     if n == 0:
         return _empty_plan(name, time.perf_counter() - t0)
+    notes = [m for m in (oversized_patches(area),) if m]  # patches larger than the tool tip
     if robot is None:
         robot = puma560(tool_length=params.reach.tool_length)
     mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
@@ -153,11 +205,8 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
     cover = sampled.nondominated_cover
     setups = sampled.nondominated_setups
     if len(setups) == 0:
-        plan = _empty_plan(name, 0.0)
-        plan.n_rfc, plan.candidates, plan.status = reach.n_rfc, len(sampled.setups), "no_solution"
-        plan.uncoverable = np.arange(n)
-        plan.seconds = time.perf_counter() - t0
-        return plan
+        causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
+        return _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
 
     t_s = params.planner.setup_time
     costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
@@ -168,13 +217,43 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
         reachable.append(np.flatnonzero(cover[j]))
         patches.append(np.flatnonzero(cover[j] & ~done))
         done |= cover[j]
+    uncoverable = np.asarray(res.uncoverable, dtype=np.int64)
+    causes, notes = _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes)
+    _warn_all(notes)
     return SetupPlan(
         part_name=name, setups=setups[res.setups], patches=patches, reachable=reachable,
         step_costs=res.step_costs, cost=res.cost, setup_time_total=res.setup_time_total or 0.0,
         execution_time_total=res.execution_time_total or 0.0, node_expansions=res.node_expansions,
         n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
         certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
-        uncoverable=np.asarray(res.uncoverable, dtype=np.int64), seconds=time.perf_counter() - t0)
+        uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes)
+
+
+def _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes):
+    """Causes of the uncoverable patches and the warning list with the share left out."""
+    if len(uncoverable) == 0:
+        return np.zeros(0, dtype="<U18"), notes
+    causes = unreachable_causes(robot, vertices[uncoverable], normals[uncoverable], params.space, params.reach,
+                                part_mesh=mesh)
+    return causes, notes + [unreachable_message(causes, area[uncoverable], float(area.sum()), len(area))]
+
+
+def _warn_all(notes, stacklevel: int = 3) -> None:
+    for note in notes:
+        _warnings.warn(note, stacklevel=stacklevel)
+
+
+def _no_solution(name, n_rfc, candidates, causes, notes, vertices, seconds) -> SetupPlan:
+    """No candidate reaches any patch: no plan, no cost, no certificate, and why."""
+    plan = _empty_plan(name, seconds)
+    plan.n_rfc, plan.candidates, plan.status = n_rfc, candidates, "no_solution"
+    plan.certificate_cost = plan.certificate_gap = None
+    plan.uncoverable, plan.uncoverable_causes = np.arange(len(vertices)), causes
+    across = float(np.ptp(vertices.reshape(-1, 3), axis=0).max())
+    plan.warnings = notes + [f"the stain spans {across:.3g} m; if the part is really much larger or smaller, "
+                             "it was read in the wrong units (load_mesh(path, units=...))"]
+    _warn_all(plan.warnings, stacklevel=4)
+    return plan
 
 
 def _empty_plan(name: str, seconds: float) -> SetupPlan:

@@ -2,17 +2,29 @@
 
 ``meshcat.Visualizer()`` starts a server subprocess; :func:`scene` always terminates it
 (``Visualizer.close`` is broken in meshcat 0.3.2: its window has no ``close``), so no test
-or notebook leaves a server running.
+or notebook leaves a server running, and it swallows the server URL meshcat prints (the
+server is gone once the file is written, so the URL would be a dead link).
+
+The exported page opens on a camera that frames the scene (:func:`frame_camera`), can hide
+layers until the reader ticks them in the controls (:func:`set_visible`), carries a legend of
+the colours as a small HTML overlay (:func:`save_html` with ``legend=``) and can play an
+animation of the robot (:func:`animate`, :func:`robot_node_transforms`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import html as _html
+import io
+import math
 import subprocess
 
 import numpy as np
 
 from ..io import write_text
+
+#: vertical field of view of meshcat's default perspective camera, degrees
+CAMERA_FOV_DEG = 75.0
 
 
 def _rgb_int(color) -> int:
@@ -25,7 +37,8 @@ def scene():
     """A fresh meshcat visualizer whose server is shut down on exit, even on error."""
     import meshcat
 
-    vis = meshcat.Visualizer()
+    with contextlib.redirect_stdout(io.StringIO()):  # the URL of a server that will not outlive us
+        vis = meshcat.Visualizer()
     try:
         yield vis
     finally:
@@ -100,7 +113,7 @@ def add_robot(vis, name: str, robot, q, world_T_base=None, geometry: str = "coll
     if geometry not in ("collision", "visual"):
         raise ValueError(f"geometry must be 'collision' or 'visual', got {geometry!r}")
     shown = robot.collision_model if geometry == "collision" else robot.visual_model
-    viz = MeshcatVisualizer(robot.model, shown, shown)
+    viz = MeshcatVisualizer(robot.model, collision_model=None, visual_model=shown)  # each shape once
     viz.initViewer(viewer=vis)
     viz.loadViewerModel(rootNodeName=name)
     viz.display(np.asarray(q, float))
@@ -108,6 +121,134 @@ def add_robot(vis, name: str, robot, q, world_T_base=None, geometry: str = "coll
         vis[name].set_transform(np.asarray(world_T_base, float))
 
 
-def save_html(vis, path):
-    """Write the scene as one self-contained HTML file (atomic write)."""
-    return write_text(vis.static_html(), path)
+def robot_node_transforms(robot, qs, geometry: str = "collision") -> dict:
+    """Poses of the robot's shape nodes (as :func:`add_robot` names them) for each configuration.
+
+    Parameters
+    ----------
+    robot : RobotModel
+    qs : (k, nq) float, rad
+    geometry : {"collision", "visual"}
+
+    Returns
+    -------
+    dict
+        ``"visuals/<shape name>" -> (k, 4, 4)`` float, in the robot's root frame (unscaled: the
+        shapes keep the scale :func:`add_robot` gave them).
+    """
+    import pinocchio as pin
+
+    shown = robot.collision_model if geometry == "collision" else robot.visual_model
+    data, gdata = robot.model.createData(), shown.createData()
+    qs = np.atleast_2d(np.asarray(qs, dtype=float))
+    out = {f"visuals/{g.name}": np.zeros((len(qs), 4, 4)) for g in shown.geometryObjects}
+    for i, q in enumerate(qs):
+        pin.forwardKinematics(robot.model, data, q)
+        pin.updateGeometryPlacements(robot.model, data, shown, gdata)
+        for k, g in enumerate(shown.geometryObjects):
+            out[f"visuals/{g.name}"][i] = gdata.oMg[k].homogeneous
+    return out
+
+
+def animate(vis, tracks: dict, times=None, fps: int = 30, repetitions: int = 1, play: bool = True) -> None:
+    """Play node poses as a meshcat animation (kept in the static HTML, replayable in the controls).
+
+    Parameters
+    ----------
+    tracks : dict
+        Node path (relative to ``vis``) -> (k, 4, 4) float poses, one per key; all the same k.
+    times : (k,) int, optional
+        Frame number of each key (increasing); three.js interpolates between keys (linearly for
+        positions, spherically for rotations). Default ``0, 1, ..., k - 1``.
+    fps : int
+        Frames per second.
+    """
+    from meshcat.animation import Animation
+
+    if not tracks:
+        return
+    lengths = {len(v) for v in tracks.values()}
+    if len(lengths) != 1:
+        raise ValueError(f"every track must have the same number of keys, got {sorted(lengths)}")
+    k = lengths.pop()
+    times = np.arange(k) if times is None else np.asarray(times, dtype=np.int64)
+    if times.shape != (k,) or np.any(np.diff(times) <= 0):
+        raise ValueError(f"times must be {k} increasing frame numbers")
+    anim = Animation(default_framerate=int(fps))
+    for i, t in enumerate(times.tolist()):
+        with anim.at_frame(vis, t) as frame:
+            for path, poses in tracks.items():
+                frame[path].set_transform(np.asarray(poses[i], dtype=float))
+    vis.set_animation(anim, play=play, repetitions=int(repetitions))
+
+
+def frame_camera(vis, lower, upper, direction=(1.0, -1.3, 0.8), margin: float = 0.9) -> None:
+    """Aim the viewer's camera at the box ``[lower, upper]`` (metres) so it fills the view.
+
+    The orbit target is the box centre; the camera looks from ``direction`` (world frame) at the
+    distance where the box's bounding sphere fits meshcat's 75 deg field of view, times ``margin``.
+    """
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-3)
+    offset = d * margin * radius / math.sin(math.radians(CAMERA_FOV_DEG / 2.0))
+    target = np.eye(4)
+    target[:3, 3] = (lo + hi) / 2.0
+    vis["/Cameras/default"].set_transform(target)
+    # the camera node sits in meshcat's y-up "rotated" frame (Rx(90 deg)): world (x, y, z) = (x, -z, y)
+    vis["/Cameras/default/rotated/<object>"].set_property("position", [offset[0], offset[2], -offset[1]])
+
+
+def set_visible(vis, name: str, visible: bool) -> None:
+    """Show or hide a layer; the reader can still toggle it in the viewer's controls."""
+    vis[name].set_property("visible", bool(visible))
+
+
+def _css_rgb(color) -> str:
+    r, g, b = (int(round(255 * float(c))) for c in color[:3])
+    return f"rgb({r},{g},{b})"
+
+
+def legend_html(entries, title: str = "", colorbar=None, notes=()) -> str:
+    """A small fixed overlay: coloured swatches with labels, an optional colour bar, notes.
+
+    Parameters
+    ----------
+    entries : list of (color (3,) in [0, 1], label)
+    title : str
+    colorbar : (cmap name, vmin, vmax, label), optional
+        A horizontal gradient of a matplotlib colormap with its end values.
+    notes : list of str
+        Extra lines (e.g. which layers are hidden).
+    """
+    rows = [f'<div class="mavac-row"><span class="mavac-swatch" style="background:{_css_rgb(c)}"></span>'
+            f"{_html.escape(label)}</div>" for c, label in entries]
+    if colorbar is not None:
+        import matplotlib
+
+        cmap, vmin, vmax, label = colorbar
+        stops = ", ".join(_css_rgb(matplotlib.colormaps[cmap](t)) for t in np.linspace(0, 1, 11))
+        rows.append(f'<div class="mavac-cbar-label">{_html.escape(label)}</div>'
+                    f'<div class="mavac-cbar" style="background:linear-gradient(to right, {stops})"></div>'
+                    f'<div class="mavac-cbar-ends"><span>{vmin:g}</span><span>{vmax:g}</span></div>')
+    rows += [f'<div class="mavac-note">{_html.escape(n)}</div>' for n in notes]
+    head = f'<div class="mavac-title">{_html.escape(title)}</div>' if title else ""
+    return ('<div id="mavac-legend">' + head + "".join(rows) + "</div>"
+            "<style>#mavac-legend{position:fixed;left:10px;bottom:10px;max-width:360px;padding:8px 10px;"
+            "background:rgba(255,255,255,0.88);border:1px solid #999;border-radius:4px;"
+            "font:12px/1.35 sans-serif;color:#111;z-index:10;pointer-events:none}"
+            ".mavac-title{font-weight:bold;margin-bottom:4px}.mavac-row{white-space:nowrap}"
+            ".mavac-swatch{display:inline-block;width:11px;height:11px;margin-right:6px;border:1px solid #555;"
+            "vertical-align:-1px}.mavac-cbar{height:10px;border:1px solid #555;margin-top:2px}"
+            ".mavac-cbar-ends{display:flex;justify-content:space-between}.mavac-note{color:#444;margin-top:3px}"
+            "</style>")
+
+
+def save_html(vis, path, legend: str | None = None):
+    """Write the scene as one self-contained HTML file (atomic write), with an optional overlay
+    (``legend``, from :func:`legend_html`)."""
+    page = vis.static_html()
+    if legend:
+        page = page.replace("</body>", legend + "\n</body>", 1)
+    return write_text(page, path)

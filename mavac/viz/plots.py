@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import matplotlib as mpl
 import matplotlib.pyplot as plt
 import numpy as np
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -17,12 +18,48 @@ def new_figure(ncols: int = 1, nrows: int = 1, size=(5.0, 4.0), projection: str 
     return fig, axes.ravel() if axes.size > 1 else axes[0, 0]
 
 
+def _in_notebook() -> bool:
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return False
+    shell = get_ipython()
+    return shell is not None and hasattr(shell, "kernel")
+
+
 def save(fig, name: str, close: bool = True):
-    """Save ``fig`` as ``figures_dir()/name`` (PNG unless the name says otherwise)."""
+    """Save ``fig`` as ``figures_dir()/name`` (PNG unless the name says otherwise).
+
+    In a notebook the figure is also shown inline: displayed here when it is closed, else by the
+    inline backend at the end of the cell.
+    """
     path = savefig(fig, figures_dir() / name)
     if close:
+        if _in_notebook():
+            from IPython.display import display
+
+            display(fig)
         plt.close(fig)
     return path
+
+
+def discrete_colorbar(fig, ax, colors, labels, title: str, **kwargs):
+    """A colour bar for a categorical colouring: one block per colour, labelled.
+
+    Parameters
+    ----------
+    colors : (k, 3 or 4) float in [0, 1]
+    labels : k str
+    title : str
+        Colour bar label.
+    """
+    k = len(colors)
+    cmap = mpl.colors.ListedColormap(np.asarray(colors, float)[:, :3])
+    norm = mpl.colors.BoundaryNorm(np.arange(k + 1) - 0.5, k)
+    bar = fig.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, ticks=np.arange(k), **kwargs)
+    bar.ax.set_yticklabels(labels) if bar.orientation == "vertical" else bar.ax.set_xticklabels(labels)
+    bar.set_label(title)
+    return bar
 
 
 def plot_mesh(ax, mesh, color=(0.75, 0.75, 0.8), alpha: float = 0.6, face_colors=None, max_faces: int = 60000,

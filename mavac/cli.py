@@ -1,0 +1,291 @@
+"""Command line: ``mavac inspect``, ``mavac setups``, ``mavac reach`` (also ``python -m mavac``).
+
+From a mesh file to a result a person can read without the source: an HTML page (framed, with a
+legend, the robot animated), a JSON or CSV file, and a summary on the terminal that names the
+visibility method behind every coverage. Bad input exits with status 1 and the reason, no
+traceback; Ctrl-C exits with status 130 and leaves no half-written file (writes are atomic) and
+no meshcat server running.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import re
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .config import user_output_dir
+
+UNITS_HELP = ("unit of the coordinates in the file: m, cm, mm or in (default: the unit a COLLADA file "
+              "declares, metres for STL/OBJ/PLY)")
+VISIBILITY_HELP = ("how 'the camera sees a surface element' is decided: raycast = exact ray casting against "
+                   "the mesh with a back-face test; hpr = hidden point removal, the MAVAC paper's method")
+
+
+def _stage_bar(stages: list[str], quiet: bool):
+    from tqdm.auto import tqdm
+
+    # disable=None: bars only on a terminal (a log file gets the summary lines, not bar redraws)
+    return tqdm(total=len(stages), desc=stages[0], disable=True if quiet else None, file=sys.stderr, leave=False,
+                bar_format="{desc:<28} {bar:20} {n_fmt}/{total_fmt} [{elapsed}]")
+
+
+def _bars(args) -> bool:
+    return not args.quiet and sys.stderr.isatty()
+
+
+def _next(bar, label: str):
+    bar.update(1)
+    bar.set_description_str(label)
+
+
+def _default(path, stem: str, suffix: str, beside=None) -> Path:
+    """The path asked for, else ``<stem><suffix>`` beside ``beside`` or in the user's output folder."""
+    if path:
+        return Path(path)
+    return (Path(beside).parent if beside else user_output_dir()) / f"{stem}{suffix}"
+
+
+def _load(path, units, role, up):
+    from .geometry.mesh import load_mesh
+
+    try:
+        mesh = load_mesh(path, units=units, role=role)
+    except ValueError as exc:  # name the flag, not the keyword argument
+        raise ValueError(re.sub(r"units='(\w+)'", r"--units \1", str(exc))) from None
+    if up == "y":  # y-up export (many COLLADA/OBJ files): turn y onto z
+        mesh.apply_transform(np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]]))
+    return mesh
+
+
+def _inspection_params(args):
+    from .params import InspectionParams
+
+    if args.fast:
+        from .experiments.mavac_offline import fast_params
+
+        params = fast_params()
+    else:
+        params = InspectionParams()
+    spot = dataclasses.replace(params.spot, visibility=args.visibility, P_s=args.P_s)
+    guard = dataclasses.replace(params.guard, visibility=args.visibility, P_g=args.P_g)
+    nos = dataclasses.replace(params.nos, enabled=not args.no_nos)
+    spacing = params.surface_spacing if args.spacing is None else args.spacing
+    return dataclasses.replace(params, surface_spacing=spacing, seed=args.seed, spot=spot, guard=guard, nos=nos)
+
+
+def cmd_inspect(args) -> int:
+    """MAVAC offline plan of a machine: spots, guards, NoS guards, the pose set T."""
+    from .geometry.machines import machine_from_mesh
+    from .inspection.plan import plan_from_context, prepare_offline, warn_low_coverage
+
+    stem = Path(args.mesh).stem
+    out = _default(args.out, stem, "_plan.html")
+    js = _default(args.json, stem, "_plan.json", beside=out)
+    params = _inspection_params(args)
+    t0 = time.perf_counter()
+    bar = _stage_bar(["loading mesh", "surface, map, spots", "guards and NoS guards", "writing"], args.quiet)
+    with bar:
+        machine = machine_from_mesh(_load(args.mesh, args.units, "machine", args.up), name=stem)
+        _next(bar, "surface, map, spots")
+        ctx = prepare_offline(machine, params=params)
+        _next(bar, "guards and NoS guards")
+        plan = plan_from_context(ctx, progress=_bars(args))
+        warn_low_coverage(ctx, plan)
+        _next(bar, "writing")
+        plan.to_json(js)
+        plan.to_html(out)
+        _next(bar, "done")
+    print(plan.summary())
+    print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _stain_kwargs(args, scale: float) -> dict:
+    from .geometry.stain_marking import parse_stain
+
+    kw = parse_stain(args.stain, scale=scale)
+    if args.passes is not None:
+        kw["passes"] = args.passes
+    if args.intensity is not None:
+        path = Path(args.intensity)
+        if not path.is_file():
+            raise ValueError(f"--intensity {str(path)!r} does not exist")
+        kw["intensity"] = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
+    return kw
+
+
+def cmd_setups(args) -> int:
+    """Kabir et al. setup plan of a stained part: fewest, fastest setups on the Puma 560."""
+    from .geometry.stain_marking import mark_stain
+    from .params import SetupPlanParams, SetupPlannerParams
+    from .setups.plan import plan_setups
+
+    stem = Path(args.part).stem
+    out = _default(args.out, stem, "_setups.html")
+    js = _default(args.json, stem, "_setups.json", beside=out)
+    params = SetupPlanParams(seed=args.seed, planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
+    t0 = time.perf_counter()
+    bar = _stage_bar(["loading part", "marking the stain", "reach test and planning", "writing"], args.quiet)
+    with bar:
+        mesh = _load(args.part, args.units, "part", args.up)
+        _next(bar, "marking the stain")
+        part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
+                          **_stain_kwargs(args, float(mesh.metadata["mavac_scale"])))
+        _next(bar, "reach test and planning")
+        plan = plan_setups(part, params=params)
+        _next(bar, "writing")
+        plan.to_json(js)
+        plan.to_html(out, part, params=params)
+        _next(bar, "done")
+    print(f"{stem}: stain of {len(part.stain_faces)} patches, {part.patch_areas.sum() * 1e4:.1f} cm^2, "
+          f"passes {np.bincount(part.passes, minlength=4)[1:].tolist()} (1/2/3)")
+    print(plan.summary())
+    print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def cmd_reach(args) -> int:
+    """REACH-style reach study of a machine: best reach-and-visibility score per surface element."""
+    from .geometry.machines import machine_from_mesh
+    from .inspection.reach_study import reach_study
+
+    stem = Path(args.mesh).stem
+    out = _default(args.out, stem, "_reach.html")
+    csv = _default(args.csv, stem, "_reach.csv", beside=out)
+    params = _inspection_params(args)
+    t0 = time.perf_counter()
+    bar = _stage_bar(["loading mesh", "reach study", "writing"], args.quiet)
+    with bar:
+        machine = machine_from_mesh(_load(args.mesh, args.units, "machine", args.up), name=stem)
+        _next(bar, "reach study")
+        study = reach_study(machine, params=params, visibility=args.visibility, progress=_bars(args))
+        _next(bar, "writing")
+        study.to_csv(csv)
+        study.to_html(out)
+        _next(bar, "done")
+    print(study.summary())
+    print(f"wrote {out} and {csv} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _common(p: argparse.ArgumentParser, *, role: str) -> None:
+    p.add_argument("--units", choices=("m", "cm", "mm", "in"), default=None, help=UNITS_HELP)
+    p.add_argument("--up", choices=("z", "y"), default="z",
+                   help="which axis of the file points up (y: turned so that it becomes z)")
+    p.add_argument("--seed", type=int, default=0, help="seed of every random choice (same seed, same result)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(role=role)
+
+
+def _machine_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--visibility", choices=("raycast", "hpr"), default="raycast", help=VISIBILITY_HELP)
+    p.add_argument("--spacing", type=float, default=None,
+                   help="distance between surface elements of S, metres (default 0.05; 0.10 with --fast)")
+    p.add_argument("--P-s", dest="P_s", type=float, default=0.02,
+                   help="spot threshold P_s in [0, 1] (MAVAC recommends 0.02)")
+    p.add_argument("--P-g", dest="P_g", type=float, default=0.15,
+                   help="guard threshold P_g in [0, 1] (MAVAC recommends 0.15)")
+    p.add_argument("--no-nos", action="store_true", help="skip the non-observed-surface stage (no RRT-Connect)")
+    p.add_argument("--fast", action="store_true",
+                   help="coarser surface (0.10 m), reachability map and guard clusters: seconds, less coverage")
+
+
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows a default only when there is one worth showing."""
+
+    def _get_help_string(self, action):
+        if action.default in (None, False, argparse.SUPPRESS) or "default" in (action.help or ""):
+            return action.help
+        return super()._get_help_string(action)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    fmt = _HelpFormatter
+    parser = argparse.ArgumentParser(
+        prog="mavac", formatter_class=fmt,
+        description="Plan robotic cleaning from a mesh: MAVAC inspection plans for machines (UR10 on a mobile "
+                    "base, camera on the tool), Kabir et al. setup plans for stained parts (Puma 560), and "
+                    "REACH-style reach studies. Every length is in metres unless a flag says otherwise.")
+    parser.add_argument("--version", action="version", version=f"mavac {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{inspect,setups,reach}")
+
+    p = sub.add_parser("inspect", formatter_class=fmt, help="inspection plan of a machine (MAVAC offline stage)",
+                       description="MAVAC's offline computation on your machine: spots for the mobile base, guard "
+                                   "configurations of the arm, NoS guards, the ordered pose set T. Writes an HTML "
+                                   "page (robot animated through T) and a JSON file with every pose and joint "
+                                   "configuration. The machine should be 0.3-5 m across.")
+    p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
+    p.add_argument("--out", help="HTML page (default: <mesh>_plan.html in $MAVAC_OUT or the current directory)")
+    p.add_argument("--json", help="JSON plan (default: <mesh>_plan.json beside the HTML page)")
+    _common(p, role="machine")
+    _machine_options(p)
+    p.set_defaults(func=cmd_inspect)
+
+    p = sub.add_parser("setups", formatter_class=fmt, help="setup plan of a stained part (Kabir et al.)",
+                       description="Kabir et al.'s setup planning on your part: the fewest, fastest placements of "
+                                   "the part in front of a Puma 560 that let it reach every stain patch (depth-first "
+                                   "branch and bound, certified by an integer program). The part should be "
+                                   "2 cm-2 m across.")
+    p.add_argument("part", help="part mesh: .stl, .obj, .ply or .dae")
+    p.add_argument("--stain", required=True,
+                   help="which faces are stained: up:30 (normal within 30 deg of up; also down, +x, -x, +y, -y, or "
+                        "x,y,z), box:x0,y0,z0,x1,y1,z1, sphere:x,y,z,r (lengths in the file's units), colors "
+                        "(painted in the file), colors:#rrggbb, faces:i,j,k; join several with '+' (AND)")
+    p.add_argument("--passes", type=int, choices=(1, 2, 3), default=None,
+                   help="cleaning passes of every stained face (default: from --intensity or the colours, else 1)")
+    p.add_argument("--intensity", default=None,
+                   help=".npy or text file of stain intensities in (0, 1], one per face of the mesh; passes come "
+                        "from it in three equal bands")
+    p.add_argument("--subdivide", action="store_true",
+                   help="split stained triangles larger than the tool tip (1.5 cm^2) before planning")
+    p.add_argument("--setup-time", type=float, default=60.0, help="time to re-place the part, s (Kabir Table VI)")
+    p.add_argument("--t-max", type=float, default=10.0, help="time bound of the branch-and-bound search, s")
+    p.add_argument("--out", help="HTML page (default: <part>_setups.html in $MAVAC_OUT or the current directory)")
+    p.add_argument("--json", help="JSON plan (default: <part>_setups.json beside the HTML page)")
+    _common(p, role="part")
+    p.set_defaults(func=cmd_setups)
+
+    p = sub.add_parser("reach", formatter_class=fmt, help="REACH-style reach heat map of a machine",
+                       description="A reach study as ROS-Industrial's REACH does it: every surface element is scored "
+                                   "by the best maneuverability index of a collision-free arm configuration, over "
+                                   "all candidate spots, that holds the camera on its normal and sees it. Writes "
+                                   "an HTML heat map with a colour bar and a CSV with one row per element.")
+    p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
+    p.add_argument("--out", help="HTML heat map (default: <mesh>_reach.html in $MAVAC_OUT or the current directory)")
+    p.add_argument("--csv", help="CSV, one row per surface element (default: <mesh>_reach.csv beside the HTML page)")
+    _common(p, role="machine")
+    _machine_options(p)
+    p.set_defaults(func=cmd_reach)
+    return parser
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"mavac: warning: {message}", file=sys.stderr)
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``mavac`` console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", UserWarning)
+        warnings.showwarning = _show_warning
+        try:
+            return args.func(args)
+        except (ValueError, TypeError) as exc:
+            print(f"mavac {args.command}: error: {exc}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print(f"mavac {args.command}: interrupted", file=sys.stderr)
+            return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

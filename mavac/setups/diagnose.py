@@ -1,0 +1,109 @@
+"""Why stain patches are left out of a setup plan: too high, too far, facing away, occluded.
+
+:func:`mavac.setups.plan.plan_setups` lists the patches no candidate setup reaches. A user who
+sees "47 % of the stain unreachable" needs the likely cause, so each such patch is tested again
+over a uniform grid of the whole setup space, step by step:
+
+1. ``too_high`` / ``too_far``: no setup puts its three vertices inside the sphere that bounds
+   the arm's reach (:func:`mavac.setups.reach.reach_bound`); too high when the vertical
+   offset from the shoulder alone is beyond the reach, too far otherwise;
+2. ``facing_away``: inside the reach sphere for some setup, but no setup has an IK solution with
+   the tool along the patch normal (the normal points where the wrist cannot follow, or the
+   patch sits in the hollow around the arm's first axis);
+3. ``occluded``: IK exists but the arm collides with the part at every such setup (only when the
+   reach test checks collisions);
+4. ``missed_by_sampling``: the grid reaches it; the candidate sampling stopped before finding it
+   (more hierarchy levels or uniform sampling would).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..params import ReachParams, SetupSpaceParams
+from .reach import patch_reach, reach_bound, reach_targets
+
+CAUSES = ("too_high", "too_far", "facing_away", "occluded", "missed_by_sampling")
+CAUSE_WORDS = {"too_high": "too high for the arm", "too_far": "too far from the arm",
+               "facing_away": "facing away or too close to the base (no IK solution along their normal)",
+               "occluded": "occluded by the part (arm collides)",
+               "missed_by_sampling": "reachable on a finer grid (missed by the sampling)"}
+
+
+def diagnosis_grid(space: SetupSpaceParams, counts=(5, 5, 12)) -> np.ndarray:
+    """A coarse uniform grid over the whole setup space, ``(nx * ny * na, 3)``."""
+    xs = np.linspace(space.x_min, space.x_max, counts[0])
+    ys = np.linspace(space.y_min, space.y_max, counts[1])
+    alphas = space.alpha_min + (space.alpha_max - space.alpha_min) * np.arange(counts[2]) / counts[2]
+    return np.stack(np.meshgrid(xs, ys, alphas, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
+def unreachable_causes(robot, patch_vertices, patch_normals, space: SetupSpaceParams,
+                       params: ReachParams | None = None, part_mesh=None, grid=None) -> np.ndarray:
+    """The likely cause for each patch, one of :data:`CAUSES`.
+
+    Parameters
+    ----------
+    robot : RobotModel
+        The arm of the reach test (its base frame is where ``space`` places the part).
+    patch_vertices : (u, 3, 3) float, metres, part frame
+    patch_normals : (u, 3) float
+    space : SetupSpaceParams
+    params : ReachParams, optional
+    part_mesh : trimesh.Trimesh, optional
+        Needed when ``params.check_collision``.
+    grid : (g, 3) float, optional
+        Setups tried; default :func:`diagnosis_grid`.
+
+    Returns
+    -------
+    (u,) str
+    """
+    params = ReachParams() if params is None else params
+    v = np.asarray(patch_vertices, dtype=float).reshape(-1, 3, 3)
+    u = len(v)
+    out = np.full(u, "missed_by_sampling", dtype="<U18")
+    if u == 0:
+        return out
+    grid = diagnosis_grid(space) if grid is None else np.asarray(grid, dtype=float)
+    bound = reach_bound(robot)
+    nrm = np.asarray(patch_normals, dtype=float).reshape(-1, 3)
+    nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+    wrist = v + bound.tool_offset * nrm[:, None, :]  # last-joint origin, part frame (tool z = -n)
+    c, s = np.cos(grid[:, 2]), np.sin(grid[:, 2])
+    wx = c[:, None, None] * wrist[None, :, :, 0] - s[:, None, None] * wrist[None, :, :, 1] + space.origin_x + grid[:, 0, None, None]
+    wy = s[:, None, None] * wrist[None, :, :, 0] + c[:, None, None] * wrist[None, :, :, 1] + space.origin_y + grid[:, 1, None, None]
+    dz = wrist[..., 2] + space.table_z - bound.centre[2]
+    d2 = (wx - bound.centre[0]) ** 2 + (wy - bound.centre[1]) ** 2 + dz[None] ** 2
+    inside_any = (d2 <= bound.radius ** 2).all(axis=2).any(axis=0)
+    high = np.abs(dz).max(axis=1) > bound.radius
+    out[~inside_any] = np.where(high[~inside_any], "too_high", "too_far")
+    todo = np.flatnonzero(inside_any)
+    if len(todo) == 0:
+        return out
+    free = ReachParams(tool_length=params.tool_length, check_collision=False, batch_size=params.batch_size)
+    targets = reach_targets(v[todo], nrm[todo])
+    ik_any = patch_reach(robot, targets, grid, space, params=free).any(axis=0)
+    out[todo[~ik_any]] = "facing_away"
+    if params.check_collision and part_mesh is not None and ik_any.any():
+        keep = todo[ik_any]
+        reached = patch_reach(robot, reach_targets(v[keep], nrm[keep]), grid, space, params=params,
+                              part_mesh=part_mesh).any(axis=0)
+        out[keep[~reached]] = "occluded"
+    return out
+
+
+def unreachable_message(causes, areas, total_area: float, n_total: int) -> str:
+    """One sentence: how much of the stain is left out, and why."""
+    causes = np.asarray(causes)
+    areas = np.asarray(areas, dtype=float)
+    share = areas.sum() / total_area if total_area > 0 else math.nan
+    parts = []
+    for cause in CAUSES:
+        k = int((causes == cause).sum())
+        if k:
+            parts.append(f"{k} {CAUSE_WORDS[cause]}")
+    return (f"{len(causes)} of {n_total} stain patches ({100 * share:.0f} % of the stain area) are unreachable "
+            f"from every candidate setup and left out of the plan: " + "; ".join(parts))

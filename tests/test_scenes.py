@@ -1,0 +1,120 @@
+"""HTML views: framing camera, hidden ray layers, legend, animations of T and of the setups,
+and a headless-Chromium screenshot that is not blank."""
+
+import base64
+import dataclasses
+import re
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+import umsgpack
+
+from mavac.experiments.mavac_offline import fast_params
+from mavac.geometry.machines import machine_from_mesh
+from mavac.inspection.plan import plan_inspection
+from mavac.viz import scenes
+from mavac.viz.screenshot import find_chromium, screenshot_html
+
+
+def commands(html: str) -> list[dict]:
+    """The meshcat commands embedded in a static page (geometry blobs umsgpack refuses are skipped)."""
+    out = []
+    for b in re.findall(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)", html):
+        try:
+            out.append(umsgpack.unpackb(base64.b64decode(b)))
+        except umsgpack.UnpackException:
+            pass
+    return out
+
+
+@pytest.fixture(scope="module")
+def plan():
+    body = trimesh.creation.box(bounds=[[0, 0, 0], [1.2, 0.6, 0.9]])
+    pocket = trimesh.creation.box(bounds=[[0.3, 0.15, 0.5], [0.9, 0.45, 1.0]])
+    mesh = trimesh.boolean.difference([body, pocket], engine="manifold")
+    p = fast_params()
+    params = dataclasses.replace(p, spot=dataclasses.replace(p.spot, visibility="raycast"),
+                                 guard=dataclasses.replace(p.guard, visibility="raycast"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a low-coverage warning is not what this module tests
+        return plan_inspection(machine_from_mesh(mesh, name="cabinet"), params=params)
+
+
+@pytest.fixture(scope="module")
+def plan_html(plan, tmp_path_factory):
+    path = tmp_path_factory.mktemp("html") / "plan.html"
+    plan.to_html(path)
+    return path
+
+
+def test_pose_set_motion_moves_the_base_only_with_the_arm_home():
+    home = np.zeros(2)
+    spots = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, np.pi / 2]])
+    q = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    times, bases, qs = scenes.pose_set_motion(spots, np.array([0, 0, 1]), q, home)
+    assert np.all(np.diff(times) > 0)
+    moved = np.flatnonzero(np.any(np.diff(bases, axis=0) != 0, axis=1))
+    assert len(moved) == 1  # one base move, between the two spots
+    k = moved[0]
+    np.testing.assert_array_equal(qs[k], home)
+    np.testing.assert_array_equal(qs[k + 1], home)
+    for qi in q:  # every pose is reached and held
+        assert np.any(np.all(qs == qi, axis=1))
+    np.testing.assert_array_equal(bases[-1], spots[1])
+
+
+def test_plan_page_frames_hides_rays_animates_and_has_a_legend(plan, plan_html):
+    html = plan_html.read_text()
+    cmds = commands(html)
+    camera = [c for c in cmds if c.get("path", "").startswith("/Cameras/default")]
+    assert any(c["type"] == "set_transform" for c in camera)
+    target = next(c for c in camera if c["type"] == "set_transform")["matrix"]
+    centre = (np.asarray(plan.mesh.bounds[0]) + plan.mesh.bounds[1]) / 2
+    assert abs(target[12] - centre[0]) < 1.0 and abs(target[13] - centre[1]) < 1.0  # aimed near the machine
+    hidden = {c["path"] for c in cmds if c["type"] == "set_property" and c["property"] == "visible" and not c["value"]}
+    assert "/meshcat/guard_rays" in hidden
+    anim = [c for c in cmds if c["type"] == "set_animation"]
+    assert len(anim) == 1
+    paths = {a["path"] for a in anim[0]["animations"]}
+    assert "/meshcat/robot" in paths and any(p.startswith("/meshcat/robot/visuals/") for p in paths)
+    assert "raycast visibility" in html and "mavac-legend" in html
+    assert "127.0.0.1" not in html.split("<script>")[0]
+
+
+def test_setup_page_animates_the_part_through_its_setups(tmp_path):
+    from mavac.geometry.stain_marking import mark_stain
+    from mavac.setups.plan import plan_setups
+
+    part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 60), passes=1)
+    plan = plan_setups(part)
+    path = plan.to_html(tmp_path / "setups.html", part)
+    cmds = commands(path.read_text())
+    anim = next(c for c in cmds if c["type"] == "set_animation")
+    part_clip = next(a["clip"] for a in anim["animations"] if a["path"] == "/meshcat/part")
+    positions = next(t for t in part_clip["tracks"] if t["name"] == ".position")["keys"]
+    placed = {tuple(np.round(k["value"], 6)) for k in positions}
+    assert len(placed) == len(plan.setups)  # one placement per setup
+
+
+def _centre_colours(png) -> int:
+    import matplotlib.image as mpimg
+
+    img = (mpimg.imread(png)[..., :3] * 255).astype(np.uint8)
+    h, w = img.shape[:2]
+    return len(np.unique(img[h // 4: 3 * h // 4, w // 4: 3 * w // 4].reshape(-1, 3), axis=0))
+
+
+def test_screenshot_of_the_plan_is_not_blank(plan_html, tmp_path):
+    if find_chromium() is None:
+        pytest.skip("no Chromium on PATH: `make` installs Debian's chromium (as root); "
+                    "otherwise `sudo apt-get install chromium`")
+    from mavac.viz import meshcat_scene as ms
+
+    with ms.scene() as vis:  # an empty page: background gradient and grid only
+        empty = ms.save_html(vis, tmp_path / "empty.html")
+    shots = {name: _centre_colours(screenshot_html(page, tmp_path / f"{name}.png", size=(800, 600), budget_ms=4000))
+             for name, page in (("empty", empty), ("plan", plan_html))}
+    # the empty page has a few hundred colours (gradient, grid); the plan many thousands
+    assert shots["plan"] > 5 * shots["empty"], shots
