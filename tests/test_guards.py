@@ -52,6 +52,8 @@ def test_camera_configurations_hit_the_pose(setup):
 
 
 def test_candidates_fov_bounds_visibility_and_lazy_equals_eager(setup):
+    from mavac.vision.visibility import VisibilityScene
+
     robot, box, checker, pts, nrm = setup
     cam = CameraParams()
     params = GuardParams(P_g=0.1)
@@ -61,9 +63,10 @@ def test_candidates_fov_bounds_visibility_and_lazy_equals_eager(setup):
     # the camera is L_d along the target normal, optical axis (camera x) back along it
     assert np.allclose(cand.world_T_camera[:, :3, 3], pts[cand.target] + cam.L_d * nrm[cand.target], atol=1e-4)
     assert np.allclose(cand.world_T_camera[:, :3, 0], -nrm[cand.target], atol=1e-3)
-    vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params)
+    scene = VisibilityScene(box)  # the default visibility is exact ray casting
+    vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params, vis_scene=scene)
     assert np.all(vis <= cand.fov)  # FOV is an upper bound
-    sel = G.select_guards(cand, pts, nrm, cam, params)
+    sel = G.select_guards(cand, pts, nrm, cam, params, vis_scene=scene)
     eager = G.greedy_select(vis, params.P_g, weights=cand.maneuverability, k1=params.k1, k2=params.k2)
     assert sel.greedy.selected.tolist() == eager.selected.tolist()
     assert np.array_equal(sel.visible, vis[eager.selected])
