@@ -585,7 +585,9 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
     robot : RobotModel, optional
         Mobile manipulator with a camera frame; default :func:`mavac.robots.models.ur10_mobile`.
     params : InspectionParams, optional
-        Paper defaults (P_s = 0.02, P_g = 0.15, k1 = k2 = 1).
+        Paper defaults (P_s = 0.02, P_g = 0.15, k1 = k2 = 1), with exact ray casting (and a
+        back-face test) for visibility; ``InspectionParams().with_visibility("hpr")`` selects the
+        paper's hidden point removal.
     rmap : ReachabilityMap, optional
         Reuse a map (default: built or loaded from the disk cache for ``robot``/``params.reach``).
     progress : bool
