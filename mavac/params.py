@@ -11,7 +11,7 @@ One section per paper stage, each naming the modules that read it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .validate import check_fields, check_int, check_nonnegative, check_positive, check_range, check_unit
 
@@ -40,11 +40,11 @@ class CameraParams:
     # the HSV filter, and it is the NFOV depth minimum range (spec 0.5-3.86 m), so the guard
     # target (placed L_d along the normal) still gets depth.
     L_d: float = 0.5
-    # HPR radius = factor x farthest point distance; the paper gives none, Katz et al. need
-    # R > max distance (factor > 1). Ours: 10, chosen from our sensitivity study against ray
-    # casting (data/results/mavac_hpr_radius.csv, notebook 03): on all three machines it
-    # misclassifies far fewer in-FOV pairs than Open3D's tutorial value 100 (which calls ~90 %
-    # of the ray-hidden ones visible) and is the best of factors 1.5-100 or within 0.1 pp of it.
+    # HPR radius for this camera at its guard stand-off L_d (spot visibility, seen from farther,
+    # has its own: SpotParams.hpr_radius_factor): factor x farthest point distance; the paper
+    # gives none, Katz et al. need R > max distance (factor > 1). Ours: 10, chosen from our
+    # sensitivity study against ray casting over guard poses (data/results/mavac_hpr_radius.csv,
+    # notebook 03): the factor that misclassifies the fewest in-FOV pairs over the three machines.
     hpr_radius_factor: float = 10.0
 
     def __post_init__(self):
@@ -552,8 +552,15 @@ class SpotParams:
     # Ours: "visible from a spot" = visible from a viewpoint above the base at one of these
     # heights (m), a stand-in for where the arm can hold the camera.
     view_heights: tuple = (0.8, 1.6)
-    # MAVAC uses hidden point removal; "raycast" is exact visibility.
-    visibility: str = "hpr"
+    # Ours for users: "raycast" = exact ray casting against the mesh with a back-face test.
+    # MAVAC uses hidden point removal, "hpr": the notebooks that reproduce the paper select it
+    # with InspectionParams.with_visibility("hpr").
+    visibility: str = "raycast"
+    # HPR radius factor at these viewpoints (0.5-3 m from the surface, farther than a guard's
+    # L_d): ours, the factor that misclassifies the fewest (viewpoint, element) pairs against
+    # ray casting over the three machines (data/results/mavac_hpr_radius_spots.csv, notebook 02).
+    # The guards' factor 10 hid ~1/4 of the elements really visible from a spot.
+    hpr_radius_factor: float = 30.0
 
     def __post_init__(self):
         check_fields(self)
@@ -569,6 +576,7 @@ class SpotParams:
         _check_positive_tuple("view_heights", self.view_heights)
         if self.visibility not in _VISIBILITY_METHODS:
             raise ValueError(f"visibility must be one of {_VISIBILITY_METHODS}, got {self.visibility!r}")
+        check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -584,8 +592,10 @@ class GuardParams:
     # Ours: one guard candidate per small cluster of surface elements of this size, m
     # (the paper assigns "a guard point to each surface").
     guard_spacing: float = 0.10
-    # MAVAC uses FOV + HPR; "raycast" replaces HPR with exact visibility.
-    visibility: str = "hpr"
+    # Ours for users: FOV + "raycast" (exact ray casting with a back-face test). MAVAC uses
+    # FOV + HPR, "hpr" (radius CameraParams.hpr_radius_factor): the notebooks that reproduce the
+    # paper select it with InspectionParams.with_visibility("hpr").
+    visibility: str = "raycast"
     # Point set HPR runs on: "surface" = all of S (Fig. 3 shows HPR points outside the
     # pyramid, so the paper runs HPR on the whole cloud), "fov" = only the points in the FOV.
     hpr_input: str = "surface"
@@ -660,6 +670,18 @@ class InspectionParams:
     spot: SpotParams = SpotParams()
     guard: GuardParams = GuardParams()
     nos: NoSParams = NoSParams()
+
+    @property
+    def visibility(self) -> str:
+        """Visibility method behind C and O: ``"raycast"``, ``"hpr"``, or both named per stage."""
+        spot, guard = self.spot.visibility, self.guard.visibility
+        return guard if spot == guard else f"spots {spot}, guards {guard}"
+
+    def with_visibility(self, method: str) -> InspectionParams:
+        """The same parameters with ``method`` ("raycast" or "hpr", MAVAC's) for spots and guards."""
+        if method not in _VISIBILITY_METHODS:
+            raise ValueError(f"method must be one of {_VISIBILITY_METHODS}, got {method!r}")
+        return replace(self, spot=replace(self.spot, visibility=method), guard=replace(self.guard, visibility=method))
 
     def __post_init__(self):
         check_fields(self)

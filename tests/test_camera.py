@@ -6,6 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from mavac.params import CameraParams
+from mavac.tolerances import FAR_PLANE_TOL
 from mavac.vision.camera import (
     camera_pose_looking_at,
     fov_mask,
@@ -26,11 +27,11 @@ def random_poses(rng, m):
 
 
 def fov_by_angles(points_camera, camera):
-    """MAVAC's three conditions written literally with atan2."""
+    """MAVAC's three conditions written literally with atan2 (far plane with its 1 mm tolerance)."""
     x, y, z = points_camera[..., 0], points_camera[..., 1], points_camera[..., 2]
     return (
         (x > 0)
-        & (x <= camera.L_d)
+        & (x <= camera.L_d + FAR_PLANE_TOL)
         & (np.abs(np.arctan2(y, x)) <= camera.theta_a)
         & (np.abs(np.arctan2(z, x)) <= camera.theta_b)
     )
@@ -72,6 +73,7 @@ def test_fov_mask_each_face_of_the_pyramid():
             [x, 0, -0.99 * zb],
             [x, 0.99 * ya, 0.99 * zb],
             [0.999 * CAM.L_d, 0, 0],
+            [CAM.L_d + 0.5 * FAR_PLANE_TOL, 0, 0],  # an IK residual past the far plane
         ]
     )
     outside = np.array(
@@ -81,6 +83,7 @@ def test_fov_mask_each_face_of_the_pyramid():
             [x, 0, 1.01 * zb],
             [x, 0, -1.01 * zb],
             [1.01 * CAM.L_d, 0, 0],  # beyond the detection limit
+            [CAM.L_d + 2 * FAR_PLANE_TOL, 0, 0],  # beyond it by more than the tolerance
             [-x, 0, 0],  # behind the camera
             [0, 0, 0],  # at the camera
             [-x, 0.1 * ya, 0.1 * zb],

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mavac.inspection.coverage import cover_counts, coverage_overlap
+from mavac.inspection.coverage import cover_counts, coverage_overlap, mean_pairwise_overlap
 
 
 def test_hand_made():
@@ -43,3 +43,22 @@ def test_bad_input():
         coverage_overlap(np.zeros((1, 2, 3), bool))
     with pytest.raises(ValueError, match="n_elements"):
         coverage_overlap(np.zeros((0, 0), bool))
+
+
+def test_mean_pairwise_overlap_is_the_mean_over_pairs_of_the_intersections():
+    v = np.array([[1, 1, 0, 0, 0],
+                  [0, 1, 1, 0, 0],
+                  [0, 1, 0, 0, 0]], dtype=bool)
+    # pairs (0,1), (0,2), (1,2) share element 1 each: mean 1 element of 5
+    assert mean_pairwise_overlap(v) == pytest.approx(1 / 5)
+    rng = np.random.default_rng(3)
+    for h in (2, 3, 7):
+        v = rng.random((h, 40)) < 0.3
+        brute = np.mean([np.sum(v[i] & v[j]) / 40 for i in range(h) for j in range(i + 1, h)])
+        assert mean_pairwise_overlap(v) == pytest.approx(brute)
+        # eq. 2 (covered at least twice) is never below the mean pairwise overlap
+        assert coverage_overlap(v)[1] >= mean_pairwise_overlap(v) - 1e-12
+    assert mean_pairwise_overlap(np.ones((1, 5), bool)) == 0.0
+    assert mean_pairwise_overlap(np.zeros((0, 5), bool)) == 0.0
+    with pytest.raises(ValueError, match="n_elements"):
+        mean_pairwise_overlap(v, n_elements=0)

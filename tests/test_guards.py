@@ -52,6 +52,8 @@ def test_camera_configurations_hit_the_pose(setup):
 
 
 def test_candidates_fov_bounds_visibility_and_lazy_equals_eager(setup):
+    from mavac.vision.visibility import VisibilityScene
+
     robot, box, checker, pts, nrm = setup
     cam = CameraParams()
     params = GuardParams(P_g=0.1)
@@ -61,9 +63,10 @@ def test_candidates_fov_bounds_visibility_and_lazy_equals_eager(setup):
     # the camera is L_d along the target normal, optical axis (camera x) back along it
     assert np.allclose(cand.world_T_camera[:, :3, 3], pts[cand.target] + cam.L_d * nrm[cand.target], atol=1e-4)
     assert np.allclose(cand.world_T_camera[:, :3, 0], -nrm[cand.target], atol=1e-3)
-    vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params)
+    scene = VisibilityScene(box)  # the default visibility is exact ray casting
+    vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params, vis_scene=scene)
     assert np.all(vis <= cand.fov)  # FOV is an upper bound
-    sel = G.select_guards(cand, pts, nrm, cam, params)
+    sel = G.select_guards(cand, pts, nrm, cam, params, vis_scene=scene)
     eager = G.greedy_select(vis, params.P_g, weights=cand.maneuverability, k1=params.k1, k2=params.k2)
     assert sel.greedy.selected.tolist() == eager.selected.tolist()
     assert np.array_equal(sel.visible, vis[eager.selected])
@@ -100,3 +103,37 @@ def test_covered_elements_do_not_count(setup):
                               np.random.default_rng(0))
     sel = G.select_guards(cand, pts, nrm, cam, GuardParams(P_g=0.0), covered=np.ones(len(pts), bool))
     assert len(sel.greedy.selected) == 0
+
+
+def _coplanar_in_view(pts, nrm, t, T, cam, shrink=0.9):
+    """Elements on the target's face whose camera-frame (y, z) lie well inside the pyramid's
+    far rectangle: the neighbourhood a guard looking squarely at its target must see."""
+    from mavac.vision.camera import points_in_camera
+
+    same_face = (np.abs((pts - pts[t]) @ nrm[t]) < 1e-9) & (nrm @ nrm[t] > 1 - 1e-9)
+    pc = points_in_camera(pts, T)[0]
+    lateral = ((np.abs(pc[:, 1]) <= shrink * cam.L_d * np.tan(cam.theta_a))
+               & (np.abs(pc[:, 2]) <= shrink * cam.L_d * np.tan(cam.theta_b)))
+    return np.flatnonzero(same_face & lateral)
+
+
+def test_guard_sees_its_own_target_face(setup):
+    """The guard stands L_d from its target, so the target's face lies on the far plane; the FK
+    of the IK solution moves it by up to the IK tolerance, which must not cut the face off."""
+    from mavac.vision.visibility import VisibilityScene
+
+    robot, box, checker, pts, nrm = setup
+    cam = CameraParams()
+    cand = G.guard_candidates(robot, checker, np.eye(4), pts, nrm, G.guard_targets(pts, nrm, 0.2), cam,
+                              np.random.default_rng(0))
+    rows = np.arange(len(cand))
+    assert len(cand) > 5
+    assert cand.fov[rows, cand.target].all()
+    for params, scene in ((GuardParams(visibility="hpr"), None), (GuardParams(visibility="raycast"), VisibilityScene(box))):
+        vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params, vis_scene=scene)
+        assert vis[rows, cand.target].all(), params.visibility
+        for i in rows:
+            face = _coplanar_in_view(pts, nrm, cand.target[i], cand.world_T_camera[i:i + 1], cam)
+            assert cand.fov[i, face].all()
+            if params.visibility == "raycast":  # exact visibility: the whole face in view is seen
+                assert vis[i, face].all()

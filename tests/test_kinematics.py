@@ -147,10 +147,14 @@ def test_closed_form_refused_for_other_robots(ur10):
 def test_maneuverability_range_singularities_and_limits(ur10, puma):
     rng = np.random.default_rng(9)
     for robot in (ur10, puma):
-        im = K.maneuverability(robot, _random_q(robot, rng, 500))
+        q = _random_q(robot, rng, 500)
+        im = K.maneuverability(robot, q)
         assert im.shape == (500,)
         assert np.all((im >= 0) & (im <= 1))
-        assert K.maneuverability(robot, robot.q_home) > 0.2
+        jl_max = 1.0 - np.exp(-K.JOINT_LIMIT_K / 4.0**robot.nq)  # every joint at mid-range
+        assert np.all(K.joint_limit_penalty(robot, q) <= jl_max + 1e-15)
+        np.testing.assert_allclose(im, K.manipulability_ratio(robot, q) * K.joint_limit_penalty(robot, q))
+        assert K.maneuverability(robot, robot.q_home) > 0.2 * jl_max  # home is far from singular
     home = ur10.q_home
     wrist_singular = home.copy()
     wrist_singular[4] = 0.0  # joint 4 and 6 axes aligned
@@ -194,6 +198,8 @@ def test_bad_inputs_raise(ur10):
         K.ik(ur10, np.eye(4), n_restarts=-1)
     with pytest.raises(ValueError, match="k"):
         K.maneuverability(ur10, ur10.q_home, k=-1.0)
+    with pytest.raises(ValueError, match="k"):
+        K.joint_limit_penalty(ur10, ur10.q_home, k=0.0)
 
 
 def test_pose_residual_matches_scipy_including_near_pi():
@@ -233,3 +239,17 @@ def test_ik_axis_can_aim_the_camera_optical_axis(ur10):
     np.testing.assert_allclose(T2[:, :3, 0], T[res.success, :3, 0], atol=1e-3)
     with pytest.raises(ValueError, match="frame_axis"):
         K.ik_axis(ur10, T[:1, :3, 3], T[:1, :3, 0], frame_axis=3)
+
+
+def test_joint_limit_penalty_is_eq4_with_simox_scale(ur10):
+    """MAVAC eq. 4 written out for one configuration, with k = 50 (Simox, Vahrenkamp's library)."""
+    q = ur10.q_home
+    lo, hi = ur10.q_lower, ur10.q_upper
+    expected = 1.0 - np.exp(-50.0 * np.prod((q - lo) * (hi - q) / (hi - lo) ** 2))
+    assert K.JOINT_LIMIT_K == 50.0
+    assert K.joint_limit_penalty(ur10, q) == pytest.approx(expected, rel=1e-12)
+    # a large k saturates J_l near 1 away from the limits; it still vanishes at a limit
+    assert K.joint_limit_penalty(ur10, q, k=3 * 4.0**6) > 0.5
+    at_limit = q.copy()
+    at_limit[2] = hi[2]
+    assert K.joint_limit_penalty(ur10, at_limit, k=3 * 4.0**6) == 0.0

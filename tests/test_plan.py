@@ -218,3 +218,25 @@ def test_pose_set_attributes_of_the_plan(plan):
                          ("pose_target", "target"), ("world_T_camera", "world_T_camera"),
                          ("maneuverability", "maneuverability"), ("visible", "visible")):
         assert getattr(plan, name) is getattr(ps, column)
+
+
+def test_exact_ray_casting_is_the_default_and_hpr_is_one_call_away(ctx, plan):
+    """Users get exact ray casting with a back-face test; the paper's HPR is selected explicitly."""
+    assert InspectionParams().visibility == "raycast" and plan.params.visibility == "raycast"
+    hpr = InspectionParams().with_visibility("hpr")
+    assert hpr.spot.visibility == hpr.guard.visibility == hpr.visibility == "hpr"
+    mixed = dataclasses.replace(hpr, guard=GuardParams(visibility="raycast"))
+    assert mixed.visibility == "spots hpr, guards raycast"
+    with pytest.raises(ValueError, match="method"):
+        InspectionParams().with_visibility("exact")
+    # no pose sees an element that faces away from its camera
+    cams = plan.world_T_camera[:, :3, 3]
+    facing = np.einsum("hnd,nd->hn", cams[:, None, :] - plan.points[None], plan.normals) > 0
+    assert not np.any(plan.visible & ~facing)
+
+
+def test_accessible_sets_with_other_visibility_from_one_context(ctx):
+    np.testing.assert_array_equal(ctx.accessible_with(ctx.params.spot), ctx.accessible)
+    hpr = ctx.accessible_with(dataclasses.replace(ctx.params.spot, visibility="hpr"))
+    assert hpr.shape == ctx.accessible.shape and not np.array_equal(hpr, ctx.accessible)
+    assert not np.any(hpr & ~ctx.reachable)  # visibility only removes elements from the reachable ones

@@ -91,6 +91,34 @@ def test_spot_visibility_and_accessibility(box):
     assert not far.any()  # out of reach
 
 
+def test_spot_hpr_uses_the_radius_calibrated_for_spots(box):
+    """Spot visibility runs HPR with SpotParams.hpr_radius_factor (calibrated at spot distances),
+    not with the camera's factor, which was calibrated at the guards' L_d = 0.5 m."""
+    from mavac.vision.visibility import hpr_visible
+
+    pts, fi = trimesh.sample.sample_surface_even(box, 800, seed=2)
+    spots = np.array([[0.0, -1.1, 0.0], [1.6, 0.3, 1.0]])
+    params = SpotParams(view_heights=(0.8, 1.6), visibility="hpr")
+    assert params.hpr_radius_factor != CameraParams().hpr_radius_factor
+    vis = SP.spot_visibility(pts, box.face_normals[fi], spots, params)
+    views = SP.spot_viewpoints(spots, params.view_heights)
+    np.testing.assert_allclose(views[:2], [[0.0, -1.1, 0.8], [0.0, -1.1, 1.6]])
+    expected = np.array([hpr_visible(pts, v, radius_factor=params.hpr_radius_factor) for v in views])
+    np.testing.assert_array_equal(vis, expected.reshape(2, 2, -1).any(axis=1))
+
+
+def test_spot_visibility_defaults_to_exact_ray_casting_with_back_faces(box):
+    from mavac.vision.visibility import VisibilityScene
+
+    assert SpotParams().visibility == "raycast"
+    pts, fi = trimesh.sample.sample_surface_even(box, 800, seed=3)
+    nrm = box.face_normals[fi]
+    spot = np.array([[0.0, -1.1, 0.0]])
+    vis = SP.spot_visibility(pts, nrm, spot, SpotParams(view_heights=(1.6,)), vis_scene=VisibilityScene(box))[0]
+    assert vis.any() and not vis[np.einsum("ij,ij->i", nrm, np.array([0.0, -1.1, 1.6]) - pts) <= 0].any()
+    np.testing.assert_array_equal(vis, (nrm[:, 1] < -0.9) | (nrm[:, 2] > 0.9))  # front face and top
+
+
 def test_guard_clearance(box):
     from mavac.inspection.nos import raycasting_scene
 
@@ -107,6 +135,7 @@ def test_select_spots_is_the_greedy_choice():
     sel = SP.select_spots(acc, np.zeros((3, 3)), 0.3)
     assert sel.greedy.selected.tolist() == [0, 2, 1]
     assert sel.C == pytest.approx(1.0) and sel.O == pytest.approx(1 / 6)
+    assert sel.O_pairwise == pytest.approx((1 / 3) / 6)  # one shared element over three pairs
     sel = SP.select_spots(acc, np.zeros((3, 3)), 0.9)
     assert sel.greedy.selected.tolist() == [0]
     assert sel.spots.shape == (1, 3)
@@ -124,3 +153,5 @@ def test_bad_input():
         SpotParams(jitter_theta=4.0)
     with pytest.raises(ValueError, match="heading_offsets"):
         SpotParams(heading_offsets=())
+    with pytest.raises(ValueError, match="hpr_radius_factor"):
+        SpotParams(hpr_radius_factor=1.0)

@@ -7,8 +7,9 @@ import time
 import numpy as np
 import pandas as pd
 import pinocchio as pin
+import trimesh
 
-from ..geometry.machines import MACHINE_NAMES, dust_heaps, exposed_area, load_machine
+from ..geometry.machines import MACHINE_NAMES, dust_heaps, exposed_area, load_machine, machine_from_mesh
 from ..geometry.parts import PART_NAMES, load_part
 from ..robots import kinematics
 from ..robots.models import load_robot
@@ -28,6 +29,14 @@ def machine_summary(*, names=MACHINE_NAMES, spacing: float = 0.10, seed: int = 0
                          heaps=len(dust_heaps(machine, spacing=spacing, seed=seed)),
                          faces=len(machine.mesh.faces), watertight=bool(machine.mesh.is_watertight)))
     return pd.DataFrame(rows)
+
+
+def closed_block_summary(size=(2.0, 1.0, 1.0), *, spacing: float = 0.10, seed: int = 0) -> dict:
+    """Exposed area (m^2) and heap count of a filled block of ``size`` (m): what any closed
+    footprint of that size gives, for comparison with a bench of separate boxes."""
+    block = machine_from_mesh(trimesh.creation.box(extents=size), name="closed_block")
+    return dict(size=tuple(float(v) for v in size), exposed_area=exposed_area(block),
+                heaps=len(dust_heaps(block, spacing=spacing, seed=seed)))
 
 
 def part_summary(names=PART_NAMES, seed: int = 0) -> pd.DataFrame:

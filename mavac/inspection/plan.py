@@ -240,8 +240,7 @@ class InspectionPlan:
     @property
     def visibility(self) -> str:
         """Visibility method behind C and O: ``"raycast"``, ``"hpr"``, or both named per stage."""
-        spot, guard = self.params.spot.visibility, self.params.guard.visibility
-        return guard if spot == guard else f"spots {spot}, guards {guard}"
+        return self.params.visibility
 
     def summary(self) -> str:
         """A few lines a person can read; every coverage names its visibility method."""
@@ -313,8 +312,9 @@ def _timed(timings: dict, stage: str):
     timings[stage] = time.perf_counter() - t0
 
 
-def _surface(mesh, spacing: float, seed: int):
-    """S on the machine, without the faces standing on the floor (not exposed)."""
+def surface_elements(mesh, spacing: float, seed: int):
+    """S on the machine (:class:`mavac.geometry.surface.SurfacePoints`), without the faces
+    standing on the floor (not exposed)."""
     s = sample_surface(mesh, spacing, seed=seed)
     return s.subset(~on_floor(s.points[:, 2], s.normals[:, 2]))
 
@@ -343,11 +343,14 @@ class OfflineContext:
     candidates : (m, 3) float
         Collision-free candidate spots.
     accessible : (m, n) bool
+        Visible AND reachable elements per candidate (``params.spot``'s visibility).
     clear : (n,) bool
         Elements whose normal segment to their guard point is free.
     targets : (k,) int
         Guard targets: one representative per small cluster of S.
     timings : dict
+    reachable : (m, n) bool
+        Elements whose inspecting camera pose is in the reachability map from each candidate.
     """
 
     machine: object
@@ -363,8 +366,16 @@ class OfflineContext:
     vis_scene: object = field(repr=False, default=None)
     checker: object = field(repr=False, default=None)
     timings: dict = field(default_factory=dict)
+    reachable: np.ndarray | None = field(default=None, repr=False)
     _guards: dict = field(default_factory=dict, repr=False)
     _visibility: dict = field(default_factory=dict, repr=False)
+
+    def accessible_with(self, spot_params) -> np.ndarray:
+        """Accessible sets (m, n) bool of the candidates under other spot-visibility settings
+        (``visibility``, ``hpr_radius_factor``, ``view_heights`` of ``spot_params``), e.g. Table 1
+        with HPR and with ray casting from one context."""
+        return self.reachable & _spot_visibility(self.points, self.normals, self.candidates, spot_params,
+                                                 self.vis_scene)
 
     def guard_candidates(self, row: int):
         """Feasible guard candidates of candidate spot ``row`` (computed once, then cached).
@@ -380,23 +391,32 @@ class OfflineContext:
                                                    self.targets[acc], self.params.camera, rng)
         return self._guards[row]
 
-    def select_guards(self, row: int, guard_params, covered):
-        """Greedy guard selection at candidate spot ``row``, visibility results cached."""
+    def select_guards(self, row: int, guard_params, covered, *, maneuverability=None):
+        """Greedy guard selection at candidate spot ``row``, visibility results cached.
+
+        ``maneuverability``, a function of the configurations ``(g, nq) -> (g,)``, replaces the
+        candidates' I_m in eq. 3 (e.g. one factor of it); default: their I_m.
+        """
         cache = self._visibility.setdefault((row, guard_params.visibility, guard_params.hpr_input), {})
-        return G.select_guards(self.guard_candidates(row), self.points, self.normals, self.params.camera,
+        cands = self.guard_candidates(row)
+        if maneuverability is not None and len(cands):
+            cands = dataclasses.replace(cands, maneuverability=np.asarray(maneuverability(cands.q), dtype=float))
+        return G.select_guards(cands, self.points, self.normals, self.params.camera,
                                guard_params, covered=covered, vis_scene=self.vis_scene, cache=cache)
 
 
 def _accessible_candidates(machine, robot, rmap, points, normals, params: InspectionParams, vis_scene):
-    """Collision-free candidate spots (m, 3) and their accessible sets (m, n) bool."""
+    """Collision-free candidate spots (m, 3), their reachable sets and accessible sets (m, n) bool."""
     cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
     cands = cands[SP.collision_free_spots(robot, machine.mesh, cands, margin=params.guard.collision_margin)]
-    if len(cands):
-        spot_vis = SP.spot_visibility(points, normals, cands, params.spot, camera=params.camera,
-                                      vis_scene=vis_scene)
-    else:
-        spot_vis = np.zeros((0, len(points)), dtype=bool)
-    return cands, SP.accessible_sets(rmap, cands, points, normals, spot_vis, params.camera)
+    reach = SP.reachable_sets(rmap, cands, points, normals, params.camera)
+    return cands, reach, reach & _spot_visibility(points, normals, cands, params.spot, vis_scene)
+
+
+def _spot_visibility(points, normals, cands, spot_params, vis_scene) -> np.ndarray:
+    if not len(cands):
+        return np.zeros((0, len(points)), dtype=bool)
+    return SP.spot_visibility(points, normals, cands, spot_params, vis_scene=vis_scene)
 
 
 def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | None = None,
@@ -421,19 +441,19 @@ def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | N
         raise ValueError(f"robot {robot.name} has no camera_frame; MAVAC guards need a camera on the arm")
     timings = {}
     with _timed(timings, "surface"):
-        surf = _surface(machine.mesh, params.surface_spacing, params.seed)
+        surf = surface_elements(machine.mesh, params.surface_spacing, params.seed)
     P, N = surf.points, surf.normals
     with _timed(timings, "reachability_map"):
         rmap = reachability_map(robot, params.reach) if rmap is None else rmap
     vis_scene = VisibilityScene(machine.mesh)
     with _timed(timings, "accessible_sets"):
-        cands, acc = _accessible_candidates(machine, robot, rmap, P, N, params, vis_scene)
+        cands, reach, acc = _accessible_candidates(machine, robot, rmap, P, N, params, vis_scene)
     scene = raycasting_scene(machine.mesh)
     clear = SP.guard_clearance(scene, P, N, params.camera.L_d)
     checker = CollisionChecker(robot, machine.mesh, margin=params.guard.collision_margin, floor=True)
     targets = G.guard_targets(P, N, params.guard.guard_spacing)
     return OfflineContext(machine, robot, params, P, N, cands, acc, clear, targets, scene, vis_scene,
-                          checker, timings)
+                          checker, timings, reachable=reach)
 
 
 def _empty_plan(ctx, sel, timings, message) -> InspectionPlan:
@@ -473,11 +493,13 @@ def spot_tour(selection: SpotSelection) -> tuple[np.ndarray, np.ndarray]:
     return spots[tour], selection.greedy.selected[tour]
 
 
-def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = False) -> list:
+def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = False, *,
+                    maneuverability=None) -> list:
     """Greedy guard selection at each spot, in tour order (MAVAC, "Guard selection").
 
     Elements seen by the guards of earlier spots are carried over as covered: they no longer
-    count as new for the guards of later spots.
+    count as new for the guards of later spots. ``maneuverability`` optionally replaces I_m in
+    eq. 3 (see :meth:`OfflineContext.select_guards`).
 
     Returns
     -------
@@ -486,7 +508,7 @@ def guards_at_spots(ctx: OfflineContext, rows, guard_params, progress: bool = Fa
     covered = np.zeros(len(ctx.points), dtype=bool)
     selections = []
     for row in tqdm(rows, desc="guards", disable=not progress, leave=False):
-        selection = ctx.select_guards(int(row), guard_params, covered)
+        selection = ctx.select_guards(int(row), guard_params, covered, maneuverability=maneuverability)
         covered = selection.greedy.covered
         selections.append(selection)
     return selections
@@ -563,7 +585,9 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
     robot : RobotModel, optional
         Mobile manipulator with a camera frame; default :func:`mavac.robots.models.ur10_mobile`.
     params : InspectionParams, optional
-        Paper defaults (P_s = 0.02, P_g = 0.15, k1 = k2 = 1).
+        Paper defaults (P_s = 0.02, P_g = 0.15, k1 = k2 = 1), with exact ray casting (and a
+        back-face test) for visibility; ``InspectionParams().with_visibility("hpr")`` selects the
+        paper's hidden point removal.
     rmap : ReachabilityMap, optional
         Reuse a map (default: built or loaded from the disk cache for ``robot``/``params.reach``).
     progress : bool

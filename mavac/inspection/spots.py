@@ -30,7 +30,7 @@ from ..planning.greedy import GreedyResult, greedy_select
 from ..robots.collision import CollisionChecker
 from ..validate import check_points
 from ..vision.visibility import hpr_visible
-from .coverage import coverage_overlap
+from .coverage import coverage_overlap, mean_pairwise_overlap
 from .nos import first_hit_distance
 
 
@@ -149,8 +149,14 @@ def guard_clearance(scene, points, normals, distance: float, offset: float = 1e-
     return t >= distance - offset
 
 
-def spot_visibility(points, normals, poses, params: SpotParams, *, camera: CameraParams = CameraParams(),
-                    vis_scene=None) -> np.ndarray:
+def spot_viewpoints(poses, view_heights) -> np.ndarray:
+    """Viewpoints above each spot: ``(x, y, h)`` for every pose and height, (m * len(heights), 3),
+    pose-major."""
+    poses = check_points("poses", poses)
+    return np.array([[x, y, h] for x, y, _ in poses for h in view_heights], dtype=float).reshape(-1, 3)
+
+
+def spot_visibility(points, normals, poses, params: SpotParams, *, vis_scene=None) -> np.ndarray:
     """Elements visible from a viewpoint above each spot, at any of ``params.view_heights``, (m, n) bool.
 
     Parameters
@@ -159,21 +165,21 @@ def spot_visibility(points, normals, poses, params: SpotParams, *, camera: Camer
     poses : (m, 3) float
         SE(2) spots.
     params : SpotParams
-        ``view_heights`` (m) and ``visibility`` ("hpr" or "raycast").
-    camera : CameraParams
-        HPR radius factor.
+        ``view_heights`` (m), ``visibility`` ("raycast": exact, with a back-face test; "hpr":
+        MAVAC's hidden point removal with ``params.hpr_radius_factor``, calibrated at these
+        viewpoints).
     vis_scene : mavac.vision.visibility.VisibilityScene
         Required for ``"raycast"``.
     """
     poses = check_points("poses", poses)
     heights = params.view_heights
-    views = np.array([[x, y, h] for x, y, _ in poses for h in heights], dtype=float)
+    views = spot_viewpoints(poses, heights)
     if params.visibility == "raycast":
         if vis_scene is None:
             raise ValueError("vis_scene is required for visibility='raycast'")
         vis = vis_scene.visible(points, normals, views)
     else:
-        vis = np.array([hpr_visible(points, v, radius_factor=camera.hpr_radius_factor) for v in views])
+        vis = np.array([hpr_visible(points, v, radius_factor=params.hpr_radius_factor) for v in views])
         vis = vis.reshape(len(views), len(points))
     return vis.reshape(len(poses), len(heights), len(points)).any(axis=1)
 
@@ -192,6 +198,8 @@ class SpotSelection:
         Selection over ``accessible`` with ``P_s`` (``greedy.selected`` indexes ``candidates``).
     C, O : float
         Coverage and overlap (eq. 1-2) of the selected spots' accessible sets, fractions of |S|.
+    O_pairwise : float
+        Mean over the pairs of selected spots of ``|A_i & A_j| / |S|`` (the other reading of O).
     """
 
     candidates: np.ndarray
@@ -199,6 +207,7 @@ class SpotSelection:
     greedy: GreedyResult
     C: float
     O: float
+    O_pairwise: float = 0.0
 
     @property
     def spots(self) -> np.ndarray:
@@ -206,21 +215,28 @@ class SpotSelection:
         return self.candidates[self.greedy.selected]
 
 
-def accessible_sets(rmap, poses, points, normals, visible, camera: CameraParams) -> np.ndarray:
-    """Accessible = visible AND reachable (map), for each spot, (m, n) bool (MAVAC's definition).
+def reachable_sets(rmap, poses, points, normals, camera: CameraParams) -> np.ndarray:
+    """Elements whose inspecting camera pose the arm reaches from each spot, (m, n) bool.
 
     The camera inspecting element s sits at ``s + L_d n_s`` with its optical axis along ``-n_s``;
-    the element is reachable when that pose's (voxel, direction) cell is reachable.
+    the element is reachable when that pose's (voxel, direction) cell of the map is reachable.
     """
     guard_points = points + camera.L_d * normals
-    acc = np.zeros((len(poses), len(points)), dtype=bool)
+    reach = np.zeros((len(poses), len(points)), dtype=bool)
     for i, T in enumerate(se2_matrices(poses)):
-        acc[i] = rmap.is_reachable_from(T, guard_points, -normals)
-    return acc & visible
+        reach[i] = rmap.is_reachable_from(T, guard_points, -normals)
+    return reach
+
+
+def accessible_sets(rmap, poses, points, normals, visible, camera: CameraParams) -> np.ndarray:
+    """Accessible = visible AND reachable (map), for each spot, (m, n) bool (MAVAC's definition)."""
+    return reachable_sets(rmap, poses, points, normals, camera) & visible
 
 
 def select_spots(accessible, candidates, P_s: float) -> SpotSelection:
     """The paper's greedy spot selection over precomputed accessible sets."""
     g = greedy_select(accessible, P_s)
-    C, O = coverage_overlap(accessible[g.selected], accessible.shape[1])
-    return SpotSelection(np.asarray(candidates), np.asarray(accessible), g, C, O)
+    chosen = np.asarray(accessible)[g.selected]
+    C, O = coverage_overlap(chosen, accessible.shape[1])
+    return SpotSelection(np.asarray(candidates), np.asarray(accessible), g, C, O,
+                         mean_pairwise_overlap(chosen, accessible.shape[1]))

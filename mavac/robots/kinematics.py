@@ -749,39 +749,91 @@ def estimate_manipulability_max(robot, *, n_samples: int = 20000, seed: int = 0)
     return float(w.max())
 
 
-def maneuverability(robot, q, k: float | None = None) -> np.ndarray:
-    """Maneuverability index ``I_m`` in [0, 1] (MAVAC eq. 3-4, after Vahrenkamp et al. 2012).
+#: Scale ``k`` of MAVAC eq. 4. The MAVAC paper gives no value; eq. 4 is the joint-limit
+#: penalization of Vahrenkamp et al. 2012 ("Manipulability analysis", MAVAC's ref. 26, after
+#: Tsai 1999), and 50 is the default of Simox, Vahrenkamp's open-source library that implements
+#: it (``PoseQualityManipulability::penalizeJointLimits(bool enable, float k = 50.0f)``). Each
+#: factor of the product is at most 1/4 (joint at mid-range), so for 6 joints ``J_l`` stays
+#: below ``1 - exp(-50 / 4**6) = 0.012`` and is nearly proportional to the product; eq. 3's
+#: greedy threshold is relative (P_g x the first maximum), so that scale does not change any
+#: selection, only the spread between configurations does.
+JOINT_LIMIT_K = 50.0
 
-    ``I_m = (w / w_max) * J_l`` with ``w = sqrt(det(J J^T))`` the manipulability at the tool
-    frame, ``w_max = robot.manipulability_max`` (estimated once per model by
-    :func:`estimate_manipulability_max`; the ratio is clipped to 1) and the joint-limit
-    penalty (MAVAC eq. 4)
-    ``J_l = 1 - exp(-k prod_j (q_j - l_j^-)(l_j^+ - q_j) / (l_j^+ - l_j^-)^2)``.
 
-    Parameters
-    ----------
-    robot : RobotModel
-    q : (nq,) or (n, nq) float, rad
-    k : float, optional
-        Scale of eq. 4. Each factor of the product is at most 1/4 (joint at mid-range), so the
-        product scales as 4^-nq; the default ``k = 3 * 4**nq`` gives ``J_l = 1 - e^-3 = 0.95``
-        with every joint at mid-range, independently of nq. (Vahrenkamp's Simox uses k = 50,
-        which for 6 joints caps J_l at 0.012 and leaves I_m uninformative.)
-
-    Returns
-    -------
-    (n,) float in [0, 1] (a float for a single configuration)
-    """
-    qa, single = _check_q(robot, q)
-    k = 3.0 * 4.0 ** robot.nq if k is None else check_positive("k", k)
-    lo, hi = robot.q_lower, robot.q_upper
-    prod = np.prod(np.clip((qa - lo) * (hi - qa), 0.0, None) / (hi - lo) ** 2, axis=1)
-    jl = 1.0 - np.exp(-k * prod)
+def _manipulability_max(robot) -> float:
     w_max = robot.manipulability_max
     if w_max is None:  # hand-made model: estimate once and keep it with the model's caches
         hit = robot._cache.get("manipulability_max")
         if hit is None or hit[0] is not robot.model:
             hit = robot._cache["manipulability_max"] = (robot.model, estimate_manipulability_max(robot))
         w_max = hit[1]
-    im = np.clip(_manipulability(robot, qa) / w_max, 0.0, 1.0) * jl
+    return w_max
+
+
+def manipulability_ratio(robot, q) -> np.ndarray:
+    """Distance from singular configurations: ``w / w_max`` in [0, 1], the first factor of I_m.
+
+    ``w = sqrt(det(J J^T))`` is Yoshikawa's manipulability at the tool frame and ``w_max =
+    robot.manipulability_max`` (estimated once per model by :func:`estimate_manipulability_max`);
+    the ratio is clipped to 1.
+
+    Parameters
+    ----------
+    robot : RobotModel
+    q : (nq,) or (n, nq) float, rad
+
+    Returns
+    -------
+    (n,) float in [0, 1] (a float for a single configuration)
+    """
+    qa, single = _check_q(robot, q)
+    ratio = np.clip(_manipulability(robot, qa) / _manipulability_max(robot), 0.0, 1.0)
+    return float(ratio[0]) if single else ratio
+
+
+def joint_limit_penalty(robot, q, *, k: float = JOINT_LIMIT_K) -> np.ndarray:
+    """Distance to the joint limits, MAVAC eq. 4:
+    ``J_l = 1 - exp(-k prod_j (q_j - l_j^-)(l_j^+ - q_j) / (l_j^+ - l_j^-)^2)``.
+
+    Parameters
+    ----------
+    robot : RobotModel
+    q : (nq,) or (n, nq) float, rad
+    k : float, > 0
+        Scale factor; default :data:`JOINT_LIMIT_K` (Simox's 50, see there).
+
+    Returns
+    -------
+    (n,) float in [0, 1 - exp(-k / 4**nq)] (a float for a single configuration)
+    """
+    qa, single = _check_q(robot, q)
+    check_positive("k", k)
+    lo, hi = robot.q_lower, robot.q_upper
+    prod = np.prod(np.clip((qa - lo) * (hi - qa), 0.0, None) / (hi - lo) ** 2, axis=1)
+    jl = 1.0 - np.exp(-float(k) * prod)
+    return float(jl[0]) if single else jl
+
+
+def maneuverability(robot, q, k: float = JOINT_LIMIT_K) -> np.ndarray:
+    """Maneuverability index ``I_m`` (MAVAC eq. 3-4, after Vahrenkamp et al. 2012): the product
+    of the distance from singular configurations and the distance to the joint limits,
+    ``I_m = manipulability_ratio(q) * joint_limit_penalty(q, k)``.
+
+    Parameters
+    ----------
+    robot : RobotModel
+    q : (nq,) or (n, nq) float, rad
+    k : float, > 0
+        Scale of eq. 4; default :data:`JOINT_LIMIT_K` = 50 (Simox, Vahrenkamp's implementation).
+        ``k`` scales I_m down for many joints (6 joints: I_m <= 0.012), which leaves eq. 3's
+        relative threshold unchanged; a large ``k`` (e.g. ``3 * 4**nq``, J_l = 0.95 with every
+        joint at mid-range) saturates J_l instead, so it ranks configurations almost by the
+        manipulability ratio alone.
+
+    Returns
+    -------
+    (n,) float in [0, 1] (a float for a single configuration); 0 at a singularity or a limit
+    """
+    qa, single = _check_q(robot, q)
+    im = manipulability_ratio(robot, qa) * joint_limit_penalty(robot, qa, k=k)
     return float(im[0]) if single else im

@@ -10,10 +10,11 @@ iff
 3. ``|atan2(z_c, x_c)| <= theta_b`` (projection on the camera XZ plane).
 
 With ``x_c > 0`` conditions 2-3 are evaluated as ``|y_c| <= x_c tan(theta_a)`` (identical
-sets, no trigonometry per point). A guard camera sits exactly ``L_d`` from its target along
-the normal, so a flat surface facing it lies *on* the far plane ``x_c = L_d``; condition 1 is
-therefore tested with the relative tolerance :data:`mavac.tolerances.FAR_PLANE_RTOL` (1e-9) so that
-rounding does not split such a surface at random.
+sets, no trigonometry per point). A guard camera sits ``L_d`` from its target along the
+normal, so a flat surface facing it lies *on* the far plane ``x_c = L_d``, and the guard's pose
+(the FK of an IK solution) misses the nominal one by up to the IK tolerances; condition 1 is
+therefore tested as ``x_c <= L_d + FAR_PLANE_TOL`` (:data:`mavac.tolerances.FAR_PLANE_TOL`,
+1 mm) so that a guard always sees its own target face.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np
 
 from ..geometry.transforms import check_transform, check_transforms, points_in_frame
 from ..params import CameraParams
-from ..tolerances import FAR_PLANE_RTOL, PARALLEL_TOL
+from ..tolerances import FAR_PLANE_TOL, PARALLEL_TOL
 from ..validate import check_instance, check_points, check_positive
 
 #: Column of the camera frame's rotation that is MAVAC's optical axis (camera x, see
@@ -68,13 +69,13 @@ def fov_masks(points_world, world_T_cameras, camera: CameraParams) -> np.ndarray
     -------
     (m, n) bool
         ``True`` where point j is inside the FOV pyramid of camera i (boundaries included,
-        far plane with a 1e-9 relative tolerance).
+        far plane ``L_d`` plus :data:`mavac.tolerances.FAR_PLANE_TOL` = 1 mm).
     """
     P = check_points("points_world", points_world)
     T = check_transforms("world_T_cameras", world_T_cameras)
     check_instance("camera", camera, CameraParams)
     tan_a, tan_b = np.tan(camera.theta_a), np.tan(camera.theta_b)
-    far = camera.L_d * (1.0 + FAR_PLANE_RTOL)
+    far = camera.L_d + FAR_PLANE_TOL
     out = np.zeros((T.shape[0], P.shape[0]), dtype=bool)
     block = max(1, _FOV_BLOCK_ELEMENTS // max(1, P.shape[0]))
     for start in range(0, T.shape[0], block):

@@ -348,21 +348,58 @@ def hpr_error_rates(
     ray = scene.visible(P, normals, viewpoints, candidates=fov)
     raycast_seconds = time.perf_counter() - t0
 
-    n_in_fov = int(fov.sum())
-    n_ray_visible = int(ray.sum())
-    n_ray_hidden = n_in_fov - n_ray_visible
-    n_false_visible = int((hpr & ~ray).sum())
-    n_false_hidden = int((ray & ~hpr).sum())
+    rates = classification_rates(hpr, ray, fov)
     return {
-        "false_visible": n_false_visible / n_ray_hidden if n_ray_hidden else float("nan"),
-        "false_hidden": n_false_hidden / n_ray_visible if n_ray_visible else float("nan"),
+        "false_visible": rates["false_visible"],
+        "false_hidden": rates["false_hidden"],
         "hpr_seconds": hpr_seconds,
         "raycast_seconds": raycast_seconds,
         "n_poses": int(T.shape[0]),
-        "n_in_fov": n_in_fov,
-        "n_ray_visible": n_ray_visible,
-        "n_ray_hidden": n_ray_hidden,
-        "n_false_visible": n_false_visible,
-        "n_false_hidden": n_false_hidden,
-        "agreement": 1.0 - (n_false_visible + n_false_hidden) / n_in_fov if n_in_fov else float("nan"),
+        "n_in_fov": rates["n_scored"],
+        "n_ray_visible": rates["n_visible"],
+        "n_ray_hidden": rates["n_hidden"],
+        "n_false_visible": rates["n_false_visible"],
+        "n_false_hidden": rates["n_false_hidden"],
+        "agreement": rates["agreement"],
+    }
+
+
+def classification_rates(predicted, truth, scored=None) -> dict:
+    """How a visibility classifier (e.g. HPR) compares with the truth (e.g. ray casting).
+
+    Parameters
+    ----------
+    predicted, truth : (m, n) bool
+        Visible pairs (viewpoint, element) by each method.
+    scored : (m, n) bool, optional
+        Pairs to score (e.g. those in the FOV); default all.
+
+    Returns
+    -------
+    dict
+        ``false_visible = FP / (FP + TN)`` (fraction of the truly hidden pairs called visible),
+        ``false_hidden = FN / (FN + TP)`` (fraction of the truly visible pairs called hidden),
+        ``agreement`` (fraction of scored pairs on which both agree), and the counts
+        ``n_scored, n_visible, n_hidden, n_false_visible, n_false_hidden``. A rate whose
+        denominator is zero is ``nan``.
+    """
+    pred = np.asarray(predicted, dtype=bool)
+    true = np.asarray(truth, dtype=bool)
+    if pred.shape != true.shape:
+        raise ValueError(f"predicted and truth must have the same shape, got {pred.shape} vs {true.shape}")
+    mask = np.ones_like(true) if scored is None else np.asarray(scored, dtype=bool)
+    if mask.shape != true.shape:
+        raise ValueError(f"scored must have shape {true.shape}, got {mask.shape}")
+    n_scored = int(mask.sum())
+    n_visible = int((true & mask).sum())
+    n_hidden = n_scored - n_visible
+    n_fv = int((pred & ~true & mask).sum())
+    n_fh = int((true & ~pred & mask).sum())
+    nan = float("nan")
+    return {
+        "false_visible": n_fv / n_hidden if n_hidden else nan,
+        "false_hidden": n_fh / n_visible if n_visible else nan,
+        "agreement": 1.0 - (n_fv + n_fh) / n_scored if n_scored else nan,
+        "n_scored": n_scored, "n_visible": n_visible, "n_hidden": n_hidden,
+        "n_false_visible": n_fv, "n_false_hidden": n_fh,
     }
