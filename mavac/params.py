@@ -470,6 +470,8 @@ class SetupPlannerParams:
     setup_time: float = 60.0
     # Seed of Algorithm 5's random draws (ours).
     seed: int = 0
+    # Ours: node budget of the search (None: unbounded); a deterministic cap, unlike T_max.
+    max_nodes: int | None = None
 
     def __post_init__(self):
         check_fields(self)
@@ -489,6 +491,8 @@ class SetupPlannerParams:
         check_range("iess_prob", self.iess_prob, 0.0, 1.0, lo_open=True, hi_open=True)
         check_nonnegative("setup_time", self.setup_time)
         check_int("seed", self.seed, 0)
+        if self.max_nodes is not None:
+            check_int("max_nodes", self.max_nodes, 1)
 
 
 # ---- MAVAC offline planning: reachability map, spots, guards, NoS (read by mavac/inspection) ----

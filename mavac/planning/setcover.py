@@ -231,6 +231,8 @@ class DFBnBResult:
         ``N_repeat`` used by Algorithm 5.
     uncoverable : (u,) int
         Patches no setup covers; left out of ``P``.
+    node_limited : bool
+        True when the ``max_nodes`` budget ended the search.
     """
 
     setups: np.ndarray
@@ -241,6 +243,7 @@ class DFBnBResult:
     iess: int | None
     n_repeat: int | None
     uncoverable: np.ndarray
+    node_limited: bool = False
 
 
 def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
@@ -299,20 +302,20 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
             deadline=None if params.t_max is None else deadline)
     depth_cap = m if iess is None else iess
 
-    best, best_cost, nodes, timed_out = _search(comp, costs, params, deadline, depth_cap)
+    best, best_cost, nodes, timed_out, node_limited = _search(comp, costs, params, deadline, depth_cap)
     if best_cost < math.inf:
         best_cost = math.fsum(float(costs[j]) for j in best)
     return DFBnBResult(
         setups=np.array(best, dtype=np.int64), cost=best_cost, node_expansions=nodes,
         seconds=time.perf_counter() - t0, timed_out=timed_out, iess=iess, n_repeat=n_repeat,
-        uncoverable=comp.uncoverable)
+        uncoverable=comp.uncoverable, node_limited=node_limited)
 
 
 def _search(comp: _Compressed, costs: np.ndarray, params: SetupPlannerParams, deadline: float,
-            depth_cap: int) -> tuple[tuple, float, int, bool]:
+            depth_cap: int) -> tuple[tuple, float, int, bool, bool]:
     """The depth-first search of :func:`dfbnb_setup_cover` (steps 1-5 of its Notes).
 
-    Returns ``(S*, T(S*) as summed along the branch, node expansions, timed out)``.
+    Returns ``(S*, T(S*) as summed along the branch, node expansions, timed out, node limited)``.
     """
     m, k = comp.cover.shape
     full = (1 << k) - 1
@@ -325,10 +328,14 @@ def _search(comp: _Compressed, costs: np.ndarray, params: SetupPlannerParams, de
     best_cost = math.inf
     best: tuple = ()
     nodes = 0
-    timed_out = False
+    timed_out = node_limited = False
+    max_nodes = math.inf if params.max_nodes is None else params.max_nodes
     # (P_r, S_u as a bitmask over setups, S_curr, T(S_curr))
     stack = [(full, (1 << m) - 1, (), 0.0)]
     while stack:
+        if nodes >= max_nodes:
+            node_limited = True
+            break
         p_r, s_u, s_curr, t_curr = stack.pop()
         nodes += 1
         if time.perf_counter() > deadline:  # step 1
@@ -367,7 +374,7 @@ def _search(comp: _Compressed, costs: np.ndarray, params: SetupPlannerParams, de
         for j in reversed(children):
             stack.append((p_r & ~masks[j], s_u & ~(1 << j), s_curr + (j,), t_curr + cost_list[j]))
 
-    return best, best_cost, nodes, timed_out
+    return best, best_cost, nodes, timed_out, node_limited
 
 
 def _n_repeat(params: SetupPlannerParams, m: int) -> int:
