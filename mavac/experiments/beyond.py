@@ -261,7 +261,9 @@ def alg4_summary(runs: pd.DataFrame, instances) -> pd.DataFrame:
     """Probability of optimality per object, bound and N_repeat, beside eq. 5 and the exact law.
 
     Columns: ``object, setup_time, m, q, n_min_covers, optimum_size, bound, n_repeat, recommended, runs,
-    p_optimal, ci_low, ci_high`` (measured, Wilson 95 %), ``p_iess_q`` (measured fraction of
+    p_optimal, ci_low, ci_high`` (measured, Wilson 95 %), ``p_size_q`` (plans with the minimum
+    cover size, the paper's weaker promise), ``gap_mean`` (mean relative cost above the optimum),
+    ``p_iess_q`` (measured fraction of
     seeds with IESS = q), ``p_iess_q_exact`` (:func:`iess_probabilities`), ``eq5`` (the paper's
     bound), ``p_optimal_predicted`` (exact IESS law x the outcome observed at each IESS value,
     see :func:`outcome_by_iess`), ``nodes_median, node_limited``.
@@ -278,7 +280,9 @@ def alg4_summary(runs: pd.DataFrame, instances) -> pd.DataFrame:
         rows.append(dict(object=name, setup_time=ts, m=inst.m, q=inst.q, n_min_covers=inst.n_min_covers,
                          optimum_size=inst.optimum_size, bound=bound, n_repeat=int(n),
                          recommended=int(n) == n_repeat_recommended(inst.m, 0.9), runs=len(g),
-                         p_optimal=k / len(g), ci_low=lo, ci_high=hi, p_iess_q=float((g.iess == inst.q).mean()),
+                         p_optimal=k / len(g), ci_low=lo, ci_high=hi, p_size_q=float((g["size"] == inst.q).mean()),
+                         gap_mean=float(((g.cost - g.optimum_cost) / g.optimum_cost).mean()),
+                         p_iess_q=float((g.iess == inst.q).mean()),
                          p_iess_q_exact=float(law[inst.q]), eq5=p_find_min_cover(inst.q, inst.m, int(n)),
                          p_optimal_predicted=float(pred), nodes_median=float(g.nodes.median()),
                          node_limited=int(g.node_limited.sum())))
@@ -350,6 +354,8 @@ def optimality_table(summary: pd.DataFrame) -> pd.DataFrame:
     out["N_IX_B"] = rec.n_repeat
     out["p_opt_IX_B"] = rec.p_optimal
     out["ci_IX_B"] = pd.Series([f"[{a:.2f}, {b:.2f}]" for a, b in zip(rec.ci_low, rec.ci_high)], index=rec.index)
+    out["p_size_q_IX_B"] = rec.p_size_q
+    out["gap_IX_B"] = rec.gap_mean
     out["p_iess_q_IX_B"] = rec.p_iess_q
     out["eq5_IX_B"] = rec.eq5
     return out.reset_index()
