@@ -12,7 +12,8 @@ from mavac.config import ROOT
 
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 PROJECT = PYPROJECT["project"]
-REQUIREMENTS = [Requirement(r) for r in PROJECT["dependencies"] + PROJECT["optional-dependencies"]["test"]]
+REQUIREMENTS = [Requirement(r) for r in PROJECT["dependencies"] + PROJECT["optional-dependencies"]["test"]
+                + PROJECT["optional-dependencies"]["dask"]]
 
 #: distribution -> module imported by mavac, its tests, benchmarks or notebooks
 IMPORT_NAMES = {"pin": "pinocchio", "scikit-learn": "sklearn", "opencv-python-headless": "cv2",
@@ -20,6 +21,8 @@ IMPORT_NAMES = {"pin": "pinocchio", "scikit-learn": "sklearn", "opencv-python-he
 #: dependencies used through trimesh, with the feature of trimesh that mavac calls
 THROUGH_TRIMESH = {"embreex": r"\.ray\.", "manifold3d": r'engine="manifold"', "rtree": r"trimesh\.proximity",
                    "pycollada": r'"\.dae"'}
+#: the dask extra: sweeps reach a dask cluster through joblib's "dask" backend
+THROUGH_JOBLIB = {"dask": r'parallel_backend\("dask"\)'}
 #: test tools used by the command line of `make test`, not imported
 TOOLS = {"pytest-timeout": "\ntimeout = ", "nbval": "--nbval", "ipykernel": "ipykernel install", "nbconvert": "nbconvert", "nbformat": "nbval"}
 #: declared for code on other branches that is being merged; drop an entry once mavac imports it
@@ -68,6 +71,9 @@ def test_every_declared_dependency_is_used(req):
         return
     if name in THROUGH_TRIMESH:
         assert re.search(THROUGH_TRIMESH[name], text), f"{name}: mavac no longer uses that trimesh feature"
+        return
+    if name in THROUGH_JOBLIB:
+        assert re.search(THROUGH_JOBLIB[name], text), f"{name}: no sweep runs on the dask backend any more"
         return
     if name in TOOLS:
         assert TOOLS[name] in (ROOT / "Makefile").read_text() + (ROOT / "pyproject.toml").read_text() + text
