@@ -18,6 +18,7 @@ scheduling or machine speed.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import warnings
 from dataclasses import dataclass
@@ -315,32 +316,40 @@ def outcome_by_iess(runs: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="agree")
 
 
-def plot_alg4(summary: pd.DataFrame, bound: str = "b", setup_time: float = 60.0):
-    """Probability of optimality against N_repeat per object (measured with its 95 % interval,
-    predicted), with eq. 5's bound and the exact probability that IESS = q."""
-    summary = summary[(summary.bound == bound) & (summary.setup_time == setup_time)]
+def plot_alg4(summary: pd.DataFrame, bound: str = "b"):
+    """Probability of optimality against N_repeat, one row per setup time and one column per
+    object (measured with its 95 % interval, predicted), with eq. 5's bound and the exact
+    probability that IESS = q."""
+    summary = summary[summary.bound == bound]
     names = list(dict.fromkeys(summary.object))
-    fig, axes = new_figure(ncols=len(names), size=(3.6, 3.3))
-    for ax, name in zip(np.atleast_1d(axes), names):
-        s = summary[summary.object == name].sort_values("n_repeat")
-        ax.fill_between(s.n_repeat, s.ci_low, s.ci_high, color="tab:blue", alpha=0.2, lw=0)
-        ax.semilogx(s.n_repeat, s.p_optimal, "o-", c="tab:blue", ms=3, label="Alg. 4 + eq. 7 optimal (measured)")
-        ax.semilogx(s.n_repeat, s.p_optimal_predicted, ":", c="tab:blue", label="predicted (exact IESS law)")
-        ax.semilogx(s.n_repeat, s.p_iess_q_exact, "-", c="tab:green", label="P(IESS = q), exact")
-        ax.semilogx(s.n_repeat, s.eq5, "--", c="tab:red", label="eq. 5 bound (unique cover)")
-        rec = s[s.recommended]
-        ax.axvline(rec.n_repeat.iloc[0], color="grey", ls=":", lw=1)
-        r = s.iloc[0]
-        ax.set_title(f"{name}\nm = {r.m}, q = {r.q} ({r.n_min_covers} min. covers), |S*| = {r.optimum_size}",
-                     fontsize=8)
-        ax.set_xlabel("N_repeat (dotted: Sec. IX-B choice)")
-        ax.set_ylim(-0.03, 1.03)
-    np.atleast_1d(axes)[0].set_ylabel("probability")
-    handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
+    times = sorted(summary.setup_time.unique())
+    fig, axes = new_figure(ncols=len(names), nrows=len(times), size=(3.6, 2.9))
+    axes = np.asarray(axes).reshape(len(times), len(names))
+    for (i, ts), (j, name) in itertools.product(enumerate(times), enumerate(names)):
+        _alg4_panel(axes[i, j], summary[(summary.object == name) & (summary.setup_time == ts)])
+        axes[i, j].set_title(f"{name}, setup time {ts:g} s", fontsize=8)
+        axes[i, 0].set_ylabel("probability")
+    for j, name in enumerate(names):
+        r = summary[summary.object == name].iloc[0]
+        axes[-1, j].set_xlabel(f"N_repeat (dotted: Sec. IX-B choice)\nm = {r.m}, q = {r.q} "
+                               f"({r.n_min_covers} min. covers), |S*| = {r.optimum_size}", fontsize=8)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=4, frameon=False, fontsize=8)
-    fig.suptitle(f"Algorithm 4, bound {'eq. 7' if bound == 'b' else 'eq. 2'}, setup time {setup_time:g} s", fontsize=9)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.suptitle(f"Algorithm 4 with bound {'eq. 7' if bound == 'b' else 'eq. 2'}: probability of the certified optimum",
+                 fontsize=9)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     return fig
+
+
+def _alg4_panel(ax, s: pd.DataFrame) -> None:
+    s = s.sort_values("n_repeat")
+    ax.fill_between(s.n_repeat, s.ci_low, s.ci_high, color="tab:blue", alpha=0.2, lw=0)
+    ax.semilogx(s.n_repeat, s.p_optimal, "o-", c="tab:blue", ms=3, label="Alg. 4 optimal (measured, 95 % CI)")
+    ax.semilogx(s.n_repeat, s.p_optimal_predicted, ":", c="k", lw=1, label="predicted (exact IESS law)")
+    ax.semilogx(s.n_repeat, s.p_iess_q_exact, "-", c="tab:green", label="P(IESS = q), exact")
+    ax.semilogx(s.n_repeat, s.eq5, "--", c="tab:red", label="eq. 5 bound (unique cover)")
+    ax.axvline(s[s.recommended].n_repeat.iloc[0], color="grey", ls=":", lw=1)
+    ax.set_ylim(-0.03, 1.03)
 
 
 def optimality_table(summary: pd.DataFrame) -> pd.DataFrame:
@@ -440,6 +449,7 @@ def plot_visibility(summary: pd.DataFrame):
         ax.bar(x + (k - 1) * w, vals, w, yerr=np.nan_to_num(err), capsize=3, label=label)
     ax.set_xticks(x, machines)
     ax.set_ylabel("offline coverage C (fraction of S)")
+    ax.set_title("mean and standard deviation over seeds", fontsize=9)
     ax.set_ylim(0, 1)
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
