@@ -198,8 +198,9 @@ class _Alg4Task:
     def __call__(self, _=None) -> list[dict]:
         rows = []
         for seed in self.seeds:
+            # bounded by nodes only: a wall-time T_max would make the rows machine-dependent
             p = SetupPlannerParams(algorithm=4, bound=self.bound, n_repeat=self.n_repeat, seed=seed,
-                                   setup_time=self.inst.setup_time, max_nodes=self.max_nodes)
+                                   setup_time=self.inst.setup_time, t_max=None, max_nodes=self.max_nodes)
             d = dfbnb_setup_cover(self.inst.cover, self.inst.costs, patch_area=self.inst.area, params=p)
             rows.append(dict(object=self.inst.name, setup_time=self.inst.setup_time, m=self.inst.m,
                              bound=self.bound, n_repeat=self.n_repeat,
