@@ -136,3 +136,4 @@ def test_visibility_rows_reevaluate_the_plan_with_ray_casting():
         assert row.C_raycast == pytest.approx(row.C - row.false_visible + row.missed)
     summary = B.visibility_summary(plans)
     assert summary.seeds.tolist() == [1, 1] and math.isnan(summary.C_sd.iloc[0])
+    assert plans.rrt_timeouts.dtype.kind == "i" and (plans.rrt_timeouts >= 0).all()

@@ -395,7 +395,8 @@ def _plan_row(plan, seed: int, vis_scene) -> dict:
     return dict(machine=plan.machine_name, seed=seed, visibility=plan.visibility, elements=len(plan.points),
                 spots=plan.n_spots, guards=plan.n_guards, nos_guards=plan.n_nos_guards, C=plan.C,
                 C_raycast=float(seen.mean()), false_visible=float((counted & ~seen).mean()),
-                missed=float((seen & ~counted).mean()))
+                missed=float((seen & ~counted).mean()),
+                rrt_timeouts=sum(a.get("reason") == "Timeout" for a in plan.nos_attempts))
 
 
 def visibility_plans(*, machines=MACHINE_NAMES, seeds=(0,), params: InspectionParams | None = None,
@@ -416,7 +417,8 @@ def visibility_plans(*, machines=MACHINE_NAMES, seeds=(0,), params: InspectionPa
         One row per machine, seed and method: ``machine, seed, visibility, elements, spots,
         guards, nos_guards, C`` (as the plan counts it), ``C_raycast`` (the plan's camera poses
         under exact ray casting), ``false_visible`` (fraction of S the plan counts but no pose
-        sees), ``missed`` (seen, not counted).
+        sees), ``missed`` (seen, not counted), ``rrt_timeouts`` (NoS searches stopped by the
+        wall-time safety cap instead of their iteration budget: such a row depends on load).
     """
     params = InspectionParams() if params is None else params
     items = [(m, int(s), params) for m in machines for s in seeds]
@@ -431,7 +433,7 @@ def visibility_summary(plans: pd.DataFrame) -> pd.DataFrame:
     out = g.agg(seeds=("seed", "size"), C=("C", "mean"), C_sd=("C", "std"), C_raycast=("C_raycast", "mean"),
                 C_raycast_sd=("C_raycast", "std"), false_visible=("false_visible", "mean"),
                 missed=("missed", "mean"), guards=("guards", "mean"), nos_guards=("nos_guards", "mean"),
-                spots=("spots", "mean"))
+                spots=("spots", "mean"), rrt_timeouts=("rrt_timeouts", "sum"))
     return out.reset_index()
 
 
