@@ -30,11 +30,7 @@ def small():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         plan = plan_inspection(machine, params=fast_params())
-    ps = plan.pose_set
-    keep = slice(0, 3)
-    short = PoseSet(ps.poses[keep], ps.spot[keep], ps.kind[keep], ps.target[keep], ps.world_T_camera[keep],
-                    ps.maneuverability[keep], ps.visible[keep])
-    return machine, dataclasses.replace(plan, pose_set=short)
+    return machine, dataclasses.replace(plan, pose_set=plan.pose_set.head(3))
 
 
 def test_same_seed_same_row_and_no_client_left(small):
