@@ -298,6 +298,44 @@ class PartReach:
         return self.targets.n_patches
 
 
+class FeasibleReach:
+    """A reach function that reaches nothing from setups a ``feasible`` test refuses.
+
+    Used when something other than the reach test decides whether a setup exists at all, e.g.
+    the holding arm of a two-arm cell must present the part there
+    (:class:`mavac.setups.held.HeldSetups`): a refused setup covers no patch, so the planner
+    drops it; ``dropped`` counts the refused setups (each asked once through
+    :class:`CountingReach`).
+
+    Parameters
+    ----------
+    reach_fn : callable
+        ``reach_fn(setups (k, 3)) -> (k, n) bool``.
+    feasible : callable
+        ``feasible(setups (k, 3)) -> (k,) bool``.
+    """
+
+    def __init__(self, reach_fn: Callable[[np.ndarray], np.ndarray], feasible: Callable[[np.ndarray], np.ndarray]):
+        self.reach_fn = reach_fn
+        self.feasible = feasible
+        self.dropped = 0
+
+    def __call__(self, setups) -> np.ndarray:
+        setups = check_points("setups", setups, 3)
+        ok = np.asarray(self.feasible(setups), dtype=bool).reshape(-1)
+        if ok.shape != (len(setups),):
+            raise ValueError(f"feasible must return a ({len(setups)},) bool array, got shape {ok.shape}")
+        out = np.zeros((len(setups), self.n_patches), dtype=bool)
+        if ok.any():
+            out[ok] = self.reach_fn(setups[ok])
+        self.dropped += int((~ok).sum())
+        return out
+
+    @property
+    def n_patches(self) -> int:
+        return int(self.reach_fn.n_patches)
+
+
 def reach_sweep(reach: Callable[[np.ndarray], np.ndarray], setups, *, n_jobs: int | None = None,
                 chunk: int = 256, desc: str = "reach sweep") -> np.ndarray:
     """Evaluate a (picklable) reach function on many setups in parallel chunks.
