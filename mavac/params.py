@@ -324,9 +324,13 @@ class ReachParams:
     collision_standoff: float = 0.01
     # Vertex targets per IK batch (memory bound; ~100 MB of float64 at 1e6). Ours.
     batch_size: int = 1_000_000
+    # Random restarts per target of the numerical (DLS) IK, for arms without a closed form
+    # (the 7-DOF iiwa); the Puma's closed form ignores it. Ours: 12, the solver's default.
+    ik_restarts: int = 12
 
     def __post_init__(self):
         check_fields(self)
+        check_int("ik_restarts", self.ik_restarts, lo=0)
         check_nonnegative("tool_length", self.tool_length)
         check_nonnegative("collision_margin", self.collision_margin)
         check_nonnegative("collision_standoff", self.collision_standoff)
@@ -779,8 +783,9 @@ class BimanualCellParams:
     tool_length: float = 0.12
     space: SetupSpaceParams = field(default_factory=_cell_space)
     sampling: SamplingParams = field(default_factory=_cell_sampling)
-    # pybullet's default step (240 Hz): 34 samples per period of the paper's 7 Hz oscillation.
-    time_step: float = 1.0 / 240.0
+    # Ours: 500 Hz. The impedance loop on the iiwa's light wrist diverged at pybullet's default
+    # 240 Hz (explicit damping on link 7's small inertia); 71 samples per 7 Hz period.
+    time_step: float = 0.002
     # Ours: setup and approach motions at 0.5 rad/s on the joint that moves most (the iiwa 7's
     # axis limits are 98-180 deg/s; a cautious half of the slowest).
     joint_speed: float = 0.5
@@ -796,6 +801,14 @@ class BimanualCellParams:
     force_gain: float = 6.0
     # Ours: pybullet friction coefficient pad/part, the wet sponge on plastic of ScrubModel.friction.
     friction: float = 0.4
+    # Ours: contact stiffness (N/m) and damping (N s/m) of the foam pad: 10 N compresses it 1 mm.
+    pad_stiffness: float = 1.0e4
+    pad_damping: float = 200.0
+    # Preston coefficient of the cell's measured wear, stain layers per (Pa x m of sliding). Ours,
+    # for the same reason as ScrubModel.preston (the paper's C_p thresholds inside the GPR
+    # bounds): the pad's measured sliding speed in pybullet (~0.1 m/s) is a third of what the
+    # analytic model assumes, and 1e-4 left C_p ~ 0 at every point we tried.
+    preston: float = 5.0e-4
     # Ours: re-plan rounds after the planned passes (Kabir Sec. IX-C iterates "until there is no
     # more stain left"; we bound it).
     max_rounds: int = 3
@@ -807,7 +820,7 @@ class BimanualCellParams:
     def __post_init__(self):
         check_fields(self)
         for name in ("arm_separation", "grasp_offset", "part_mass", "tool_length", "time_step", "joint_speed",
-                     "kp", "kd", "rot_stiffness", "damping_ratio", "friction"):
+                     "kp", "kd", "rot_stiffness", "damping_ratio", "friction", "pad_stiffness", "pad_damping", "preston"):
             check_positive(name, getattr(self, name))
         check_nonnegative("force_gain", self.force_gain)
         check_range("time_step", self.time_step, 0.0, 0.02, lo_open=True)

@@ -246,7 +246,7 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
             pos = np.stack([cs * p[:, 0] - ss * p[:, 1] + tx[si], ss * p[:, 0] + cs * p[:, 1] + ty[si],
                             p[:, 2] + space.table_z], axis=1)
             ax = np.stack([cs * a[:, 0] - ss * a[:, 1], ss * a[:, 0] + cs * a[:, 1], a[:, 2]], axis=1)
-            ok = ik_axis(robot, pos, ax).success
+            ok = ik_axis(robot, pos, ax, n_restarts=params.ik_restarts).success
             if params.check_collision and ok.any():
                 T = base_T_part(setups, space) if T is None else T
                 ok[ok] = _collision_free(robot, pos[ok], ax[ok], si[ok], T, params, part_mesh)
@@ -258,7 +258,7 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
 def _collision_free(robot, pos, ax, setup_index, base_T_parts, params, part_mesh) -> np.ndarray:
     """Arm-vs-part check at a stand-off of ``collision_standoff`` along the normal (the tool
     tip touches the surface at the target itself)."""
-    lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax)
+    lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax, n_restarts=params.ik_restarts)
     free = lifted.success.copy()
     checker = CollisionChecker(robot, part_mesh, margin=params.collision_margin)
     for j in np.unique(setup_index):
