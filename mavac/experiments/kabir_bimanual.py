@@ -227,7 +227,7 @@ def _snapshot_fn():
         target = T[:3, 3] + np.array([0.0, 0.0, 0.06])
         ids = stain_overlay(sim, stain_opacity(state.thickness))
         try:
-            return snapshot(sim, look_at(target + np.array([-0.35, -0.55, 0.45]), target))
+            return snapshot(sim, look_at(target + np.array([0.0, -0.75, 0.5]), target))
         finally:
             for body in ids:
                 sim.world.remove_body(body)

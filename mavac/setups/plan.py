@@ -198,20 +198,12 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
     if robot is None:
         robot = puma560(tool_length=params.reach.tool_length)
     mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
-    reach_fn = PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach, part_mesh=mesh)
-    if feasible is not None:
-        reach_fn = FeasibleReach(reach_fn, check_callable("feasible", feasible, "(setups (k, 3)) -> (k,) bool"))
+    reach_fn = _reach_fn(robot, vertices, normals, params, mesh, feasible)
     reach = CountingReach(reach_fn)
-
-    if params.sampling_method == "uniform":
-        sampled = uniform_sampling(reach, params.space)
-    elif params.sampling_method == "hierarchical":
-        sampled = hierarchical_sampling(reach, params.space, params.sampling, variant=params.variant)
-    else:
-        sampled = random_sampling(reach, params.space, params.sampling, variant=params.variant, seed=params.seed)
+    sampled = _sample(reach, params)
     cover = sampled.nondominated_cover
     setups = sampled.nondominated_setups
-    if feasible is not None and reach_fn.dropped:
+    if getattr(reach_fn, "dropped", 0):
         notes.append(f"{reach_fn.dropped} of {reach.n_rfc} sampled setups dropped: {_why_dropped(feasible)}")
     if len(setups) == 0:
         causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
@@ -236,6 +228,23 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
         n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
         certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
         uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes)
+
+
+def _sample(reach, params: SetupPlanParams):
+    """Candidate setups by the configured sampling method, counted in ``reach.n_rfc``."""
+    if params.sampling_method == "uniform":
+        return uniform_sampling(reach, params.space)
+    if params.sampling_method == "hierarchical":
+        return hierarchical_sampling(reach, params.space, params.sampling, variant=params.variant)
+    return random_sampling(reach, params.space, params.sampling, variant=params.variant, seed=params.seed)
+
+
+def _reach_fn(robot, vertices, normals, params, mesh, feasible):
+    """The part's reach test, reaching nothing from setups ``feasible`` refuses (when given)."""
+    reach_fn = PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach, part_mesh=mesh)
+    if feasible is None:
+        return reach_fn
+    return FeasibleReach(reach_fn, check_callable("feasible", feasible, "(setups (k, 3)) -> (k,) bool"))
 
 
 def _why_dropped(feasible) -> str:
