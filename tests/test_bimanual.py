@@ -98,3 +98,19 @@ def test_no_client_left_after_a_raise():
             sched = schedule_for_pass(coupon.stroke, huge, ToolpathParams(), coupon.world.time_step)
             _approach(coupon.cell, sched, 0.02, huge)
     assert _connected() == before
+
+
+def test_schedule_alternates_contact_and_repositioning():
+    seg1 = np.column_stack([np.linspace(0, 0.05, 11), np.zeros(11), np.zeros(11)])
+    seg2 = seg1 + [0.0, 0.05, 0.0]
+    up = np.tile([0.0, 0.0, 1.0], (11, 1))
+    move = np.array([seg1[-1], seg1[-1] + [0, 0, 0.02], seg2[0] + [0, 0, 0.02], seg2[0]])
+    pp = PassPath(1, np.arange(2), [seg1, seg2], [up, up], [move])
+    s = schedule_for_pass(pp, BOWL, ToolpathParams(), 0.002)
+    changes = np.flatnonzero(np.diff(s.contact.astype(int)))
+    assert len(changes) == 2 and s.contact[0] and s.contact[-1]
+    assert np.allclose(s.forces[s.contact, 2], BOWL.f_n)
+    assert np.all(s.forces[~s.contact] == 0)
+    free = s.positions[~s.contact]
+    assert free[:, 2].max() == pytest.approx(0.02)  # lifted by the tool path's lift height
+    assert np.allclose(s.rotations[s.contact][:, :, 2], [0.0, 0.0, -1.0])  # pad axis into the surface
