@@ -1,7 +1,8 @@
 """Kabir's two-arm cell: wall time of the whole simulated bowl run, and the 7-DOF reach-test IK.
 
 1. ``SECONDS bimanual_bowl <x>``: wall time of :func:`mavac.experiments.kabir_bimanual.run_part`
-   on the bowl at paper scale (plan, hold, scrub, look, re-plan) on this machine.
+   on the bowl at paper scale (plan, hold, scrub, look, re-plan) with the paper's operating
+   parameters (the learner is not part of it), on this machine.
 2. ``RATIO iiwa_batched_ik_vs_per_point <x>``: the reach test's position + axis IK of the iiwa
    pad (spin about the axis free), batched (:func:`mavac.robots.kinematics.ik_axis`, DLS) vs
    one target at a time with pinocchio (``framesForwardKinematics`` + ``computeFrameJacobian``
