@@ -32,7 +32,7 @@ from ..sim.world import SimWorld
 
 PARTS = ("bowl", "hull")
 #: Fast mode: stained faces of the coarse run (ours: a few seconds of scrubbing).
-FAST_STAIN_FACES = 400
+FAST_STAIN_FACES = 300
 #: Kabir Sec. IX-C: C_p^th and P_th of the learner per part.
 THRESHOLDS = {"bowl": (0.60, 0.10), "hull": (0.90, 0.30)}
 #: Kabir Sec. IX-C: the operating parameters the paper found (v, f_n, kappa, f_x, A_x).
