@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from .validate import check_fields, check_int, check_nonnegative, check_positive, check_range, check_unit
 
 
@@ -322,9 +324,13 @@ class ReachParams:
     collision_standoff: float = 0.01
     # Vertex targets per IK batch (memory bound; ~100 MB of float64 at 1e6). Ours.
     batch_size: int = 1_000_000
+    # Random restarts per target of the numerical (DLS) IK, for arms without a closed form
+    # (the 7-DOF iiwa); the Puma's closed form ignores it. Ours: 12, the solver's default.
+    ik_restarts: int = 12
 
     def __post_init__(self):
         check_fields(self)
+        check_int("ik_restarts", self.ik_restarts, lo=0)
         check_nonnegative("tool_length", self.tool_length)
         check_nonnegative("collision_margin", self.collision_margin)
         check_nonnegative("collision_standoff", self.collision_standoff)
@@ -911,3 +917,106 @@ class SetupPlanParams:
         check_positive("cleaning_rate", self.cleaning_rate)
         if self.method not in ("milp", "dfbnb", "both"):
             raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {self.method!r}")
+
+
+# ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/sim/cell.py, mavac/sim/bimanual.py,
+# mavac/scrubbing/bimanual.py) ----
+
+
+def _cell_space() -> SetupSpaceParams:
+    # Ours (the paper's cell is not dimensioned): the part centre moves over a 0.30 x 0.30 m
+    # square between the arms, 0.45-0.75 m in front of the cleaning arm's base, its bottom
+    # 0.35 m above both bases; the holding arm presents it with its flange pointing up. Both
+    # arms reach that square (IK of the holding flange and of the pad pointing down), and no
+    # setup reaches a whole part, as in the paper (bowl 5 setups, hull 2).
+    return SetupSpaceParams(x_min=0.0, x_max=0.3, y_min=0.0, y_max=0.3, origin_x=0.45, origin_y=-0.15,
+                            table_z=0.35)
+
+
+def _cell_sampling() -> SamplingParams:
+    # Level 1 of hierarchical sampling keeps the paper's 36 = 3 x 3 x 4 setups (Table III) on
+    # the cell's 0.30 m square: 150 mm x 150 mm x 120 deg (ours); descent steps as for the Puma.
+    return SamplingParams(coarse_res_x=0.15, coarse_res_y=0.15)
+
+
+@dataclass(frozen=True)
+class BimanualCellParams:
+    """The two-arm cell of Kabir Sec. IX-C in simulation: a holding iiwa and a cleaning iiwa.
+
+    World frame = the cleaning arm's base frame (on the floor plate under joint 1, z up, x
+    towards the other arm). The holding arm's base sits ``arm_separation`` m along x, turned
+    by 180 deg so the arms face each other across the workspace. A setup ``(x, y, alpha)``
+    puts the part frame at ``Trans(origin_x + x, origin_y + y, table_z) Rz(alpha)`` in the
+    world (:func:`mavac.setups.reach.base_T_part` with ``space``), which the holding arm's
+    flange must reach through the fixed grasp ``flange_T_part = Trans(0, 0, grasp_offset)``.
+    """
+
+    # Ours: 1.2 m between the bases, so a part 0.45-0.75 m from one base is 0.45-0.75 m from
+    # the other, inside both arms' reach with the flange up (holder) and the pad down (cleaner).
+    arm_separation: float = 1.2
+    # Ours: a 60 mm adapter between the holding flange and the part frame (part z = flange z).
+    grasp_offset: float = 0.06
+    # Ours: a plastic bowl or a 3-D printed hull of ~20 cm weighs a few hundred grams.
+    part_mass: float = 0.3
+    # Ours: 120 mm from the cleaning flange to the pad face (holder and 10 mm pad).
+    tool_length: float = 0.12
+    space: SetupSpaceParams = field(default_factory=_cell_space)
+    sampling: SamplingParams = field(default_factory=_cell_sampling)
+    # Ours: 500 Hz. The impedance loop on the iiwa's light wrist diverged at pybullet's default
+    # 240 Hz (explicit damping on link 7's small inertia); 71 samples per 7 Hz period.
+    time_step: float = 0.002
+    # Ours: setup and approach motions at 0.5 rad/s on the joint that moves most (the iiwa 7's
+    # axis limits are 98-180 deg/s; a cautious half of the slowest).
+    joint_speed: float = 0.5
+    # Ours: joint PD gains (N m/rad, N m s/rad) of the holding arm and of free motions, on top
+    # of pinocchio's gravity compensation.
+    kp: float = 600.0
+    kd: float = 40.0
+    # Ours: rotational stiffness (N m/rad) and damping ratio of the cleaning arm's Cartesian
+    # impedance; translational stiffness in the tool plane is kappa of LissajousParams.
+    rot_stiffness: float = 150.0
+    damping_ratio: float = 0.7
+    # Ours: integral gain (1/s) of the explicit normal-force loop along tool z, tuned on the
+    # coupon stroke (tests/test_bimanual.py): 6/s left the mean contact force 36 % above f_n on
+    # the bowl's parameters (pad bouncing off after landing), 100/s tracks it within ~1 %.
+    force_gain: float = 100.0
+    # Ours: pybullet friction coefficient pad/part, the wet sponge on plastic of ScrubModel.friction.
+    friction: float = 0.4
+    # Ours: contact stiffness (N/m) and damping (N s/m) of the foam pad: 10 N compresses it 1 mm.
+    pad_stiffness: float = 1.0e4
+    pad_damping: float = 200.0
+    # Preston coefficient of the cell's measured wear, stain layers per (Pa x m of sliding). Ours,
+    # for the same reason as ScrubModel.preston (the paper's C_p thresholds inside the GPR
+    # bounds): the pad's measured sliding speed in pybullet (~0.1 m/s) is a third of what the
+    # analytic model assumes, and 1e-4 left C_p ~ 0 at every point we tried.
+    preston: float = 5.0e-4
+    # Ours: re-plan rounds after the planned passes (Kabir Sec. IX-C iterates "until there is no
+    # more stain left"; we bound it).
+    max_rounds: int = 3
+    # Ours: stain image size (pixels) of the camera view that measures C_p.
+    image_size: int = 128
+    # Ours: the part counts as clean when the residue is below this fraction of its stained pixels.
+    clean_residue: float = 0.02
+
+    def __post_init__(self):
+        check_fields(self)
+        for name in ("arm_separation", "grasp_offset", "part_mass", "tool_length", "time_step", "joint_speed",
+                     "kp", "kd", "rot_stiffness", "damping_ratio", "friction", "pad_stiffness", "pad_damping", "preston"):
+            check_positive(name, getattr(self, name))
+        check_nonnegative("force_gain", self.force_gain)
+        check_range("time_step", self.time_step, 0.0, 0.02, lo_open=True)
+        check_int("max_rounds", self.max_rounds, 0, 20)
+        check_int("image_size", self.image_size, 16, 1024)
+        check_unit("clean_residue", self.clean_residue)
+
+    @property
+    def world_T_cleaner(self):
+        """(4, 4) pose of the cleaning arm's base (identity: the world frame)."""
+        return np.eye(4)
+
+    @property
+    def world_T_holder(self):
+        """(4, 4) pose of the holding arm's base: ``arm_separation`` along x, facing -x."""
+        T = np.diag([-1.0, -1.0, 1.0, 1.0])
+        T[0, 3] = self.arm_separation
+        return T
