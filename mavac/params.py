@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from .validate import check_fields, check_int, check_nonnegative, check_positive, check_range, check_unit
 
 
@@ -322,9 +324,13 @@ class ReachParams:
     collision_standoff: float = 0.01
     # Vertex targets per IK batch (memory bound; ~100 MB of float64 at 1e6). Ours.
     batch_size: int = 1_000_000
+    # Random restarts per target of the numerical (DLS) IK, for arms without a closed form
+    # (the 7-DOF iiwa); the Puma's closed form ignores it. Ours: 12, the solver's default.
+    ik_restarts: int = 12
 
     def __post_init__(self):
         check_fields(self)
+        check_int("ik_restarts", self.ik_restarts, lo=0)
         check_nonnegative("tool_length", self.tool_length)
         check_nonnegative("collision_margin", self.collision_margin)
         check_nonnegative("collision_standoff", self.collision_standoff)
@@ -693,6 +699,185 @@ class InspectionParams:
         check_int("seed", self.seed, 0)
 
 
+# ---- MAVAC online execution, Algorithm 1 (read by mavac/cleaning) ----
+
+_APPROACH_READINGS = ("tool", "world")
+
+
+@dataclass(frozen=True)
+class DustParams:
+    """Green dust heaps of MAVAC's evaluation ("Experimental setup"), as pybullet visual bodies."""
+
+    # MAVAC, Experimental setup: "green dust heaps are evenly distributed at intervals of 10 cm on
+    # the surface, including within the concavities".
+    spacing: float = 0.10
+    # Ours: a heap is a sphere of this radius centred on the surface (a 3 cm dome; the paper
+    # gives no size).
+    radius: float = 0.015
+    # Ours: pure green (the paper's heaps are green; the HSV filter looks for green).
+    rgba: tuple = (0.1, 0.8, 0.1, 1.0)
+
+    def __post_init__(self):
+        check_fields(self)
+        check_positive("spacing", self.spacing)
+        check_positive("radius", self.radius)
+        if len(self.rgba) != 4 or not all(0.0 <= v <= 1.0 for v in self.rgba):
+            raise ValueError(f"rgba must be 4 values in [0, 1], got {self.rgba!r}")
+
+
+@dataclass(frozen=True)
+class DetectionParams:
+    """Dust detection from one guard view: RGB-D render, HSV threshold, blobs, back-projection
+    and the paper's filters (MAVAC, "Dust detection")."""
+
+    # Ours: 320 x 236 px over the camera's 75 x 59 deg (CameraParams): ~4.3 mm/px at the 0.5 m
+    # detection limit, so a 3 cm heap spans ~7 px, and the TinyRenderer (CPU) stays fast.
+    width: int = 320
+    height: int = 236
+    # MAVAC: "a simple HSV filter with fine-tuned parameters" (values not given). Ours, OpenCV
+    # units (H in [0, 180)): green hue 35-85, saturation >= 80, value >= 40; our grey machine,
+    # robot and floor have saturation ~0.
+    hue_min: int = 35
+    hue_max: int = 85
+    saturation_min: int = 80
+    value_min: int = 40
+    # Ours: blobs smaller than this (px) are noise.
+    min_blob_px: int = 3
+    # Depth validity, m. Near: Azure Kinect DK WFOV 2x2-binned mode operating range 0.25-2.88 m
+    # (hardware specification; the NFOV mode starts at 0.5 m, which would blank everything
+    # inside the L_d pyramid). Far: MAVAC's reliable detection limit L_d (CameraParams.L_d),
+    # the same cut as the offline FOV pyramid.
+    min_depth: float = 0.25
+    max_depth: float = 0.5
+    # "filters ... remove any dust particles that are beyond the robot's theoretically reachable
+    # workspace": UR10 reach 1.3 m from the shoulder (UR10 datasheet) plus the 0.40 m tool tube
+    # (mavac.robots.models.TOOL_TUBE_LENGTH).
+    reach: float = 1.7
+    # Ours: a node within this of an already vacuumed node is a duplicate (half the heap
+    # spacing), m.
+    duplicate_radius: float = 0.05
+    # Ours, scoring only: a node matches a true heap within this distance, m (half the spacing).
+    match_radius: float = 0.05
+
+    def __post_init__(self):
+        check_fields(self)
+        check_int("width", self.width, 8, 2048)
+        check_int("height", self.height, 8, 2048)
+        check_int("hue_min", self.hue_min, 0, 179)
+        check_int("hue_max", self.hue_max, self.hue_min, 179)
+        check_int("saturation_min", self.saturation_min, 0, 255)
+        check_int("value_min", self.value_min, 0, 255)
+        check_int("min_blob_px", self.min_blob_px, 1)
+        check_positive("min_depth", self.min_depth)
+        check_range("max_depth", self.max_depth, self.min_depth, math.inf, lo_open=True)
+        check_positive("reach", self.reach)
+        check_nonnegative("duplicate_radius", self.duplicate_radius)
+        check_positive("match_radius", self.match_radius)
+
+
+@dataclass(frozen=True)
+class ApproachParams:
+    """Areas and approach points (MAVAC, "Trajectory generation", eq. 5) and RRT-Connect."""
+
+    # Ours: DBSCAN radius of an area, m (1.5 heap spacings links neighbouring heaps), and the
+    # smallest area (1: a lone heap is an area too).
+    cluster_eps: float = 0.15
+    cluster_min_samples: int = 1
+    # eq. 5: the approach point is delta before the node, the tool within +- alpha of the guard's
+    # orientation. The paper gives neither value. Ours: delta = 0.10 m (two tool-sphere
+    # diameters), alpha = 15 deg.
+    delta: float = 0.10
+    alpha: float = math.radians(15.0)
+    # eq. 5 writes d_z - delta. "tool": delta back along the tool axis (the tool z points into
+    # the surface, so this is "above" the node as the tool sees it); "world": delta above the
+    # node along world z (d_z - delta literally in world z would be inside the machine).
+    approach_reading: str = "tool"
+    # Ours: orientations sampled within +- alpha (the first is the guard's own).
+    n_orientations: int = 8
+    # Ours: clearance of approach configurations and RRT-Connect paths to the machine, m.
+    collision_margin: float = 0.01
+    # Ours: RRT-Connect budget per plan (iterations, not time: deterministic), its wall-time
+    # safety cap, s, and collision-check resolution (fraction of the joint box diagonal).
+    rrt_max_iterations: int = 3000
+    rrt_time_limit: float = 5.0
+    rrt_resolution: float = 0.01
+    # Ours: the arm's joint speed and acceleration limits for planned motions (UR10: 2.09-3.14
+    # rad/s per joint, datasheet; ours slower, as near a machine).
+    max_joint_velocity: float = 1.0
+    max_joint_acceleration: float = 2.0
+
+    def __post_init__(self):
+        check_fields(self)
+        check_positive("cluster_eps", self.cluster_eps)
+        check_int("cluster_min_samples", self.cluster_min_samples, 1)
+        check_nonnegative("delta", self.delta)
+        check_range("alpha", self.alpha, 0.0, math.pi)
+        if self.approach_reading not in _APPROACH_READINGS:
+            raise ValueError(f"approach_reading must be one of {_APPROACH_READINGS}, got {self.approach_reading!r}")
+        check_int("n_orientations", self.n_orientations, 1)
+        check_nonnegative("collision_margin", self.collision_margin)
+        check_int("rrt_max_iterations", self.rrt_max_iterations, 1)
+        check_positive("rrt_time_limit", self.rrt_time_limit)
+        check_range("rrt_resolution", self.rrt_resolution, 0.0, 1.0, lo_open=True)
+        check_positive("max_joint_velocity", self.max_joint_velocity)
+        check_positive("max_joint_acceleration", self.max_joint_acceleration)
+
+
+@dataclass(frozen=True)
+class VacuumParams:
+    """Dust collection under Cartesian impedance control (MAVAC, "Dust collecting")."""
+
+    # MAVAC uses impedance control but gives no gains. Ours: 1000 N/m, so pressing the tool
+    # sphere its full 2.5 cm radius into a surface costs 25 N; 30 N m/rad. Damping: ours, near
+    # critical for the tool's apparent mass and stable at the 240 Hz physics step.
+    stiffness: float = 1000.0
+    rotational_stiffness: float = 30.0
+    damping: float = 60.0
+    rotational_damping: float = 1.0
+    # Ours: speed of the linear vacuuming moves, m/s.
+    speed: float = 0.10
+    # Ours: a heap is sucked up when the tool sphere's centre passes within this distance of it,
+    # m: the 2.5 cm sphere radius plus 2.5 cm of suction reach.
+    suction_radius: float = 0.05
+    # Ours: after a linear move, hold the target until within this distance, m, or this long, s.
+    settle_tol: float = 0.005
+    max_settle_time: float = 0.5
+
+    def __post_init__(self):
+        check_fields(self)
+        check_nonnegative("stiffness", self.stiffness)
+        check_nonnegative("rotational_stiffness", self.rotational_stiffness)
+        check_nonnegative("damping", self.damping)
+        check_nonnegative("rotational_damping", self.rotational_damping)
+        check_positive("speed", self.speed)
+        check_nonnegative("suction_radius", self.suction_radius)
+        check_positive("settle_tol", self.settle_tol)
+        check_nonnegative("max_settle_time", self.max_settle_time)
+
+
+@dataclass(frozen=True)
+class OnlineParams:
+    """Everything a MAVAC online trial needs (``mavac.cleaning.trial.run_trial``)."""
+
+    dust: DustParams = DustParams()
+    detection: DetectionParams = DetectionParams()
+    approach: ApproachParams = ApproachParams()
+    vacuum: VacuumParams = VacuumParams()
+    # MiR200 datasheet: maximum speed 1.1 m/s forward. Ours: base travel at that speed along
+    # the shortest path around the machine (kinematic; no acceleration phases).
+    base_speed: float = 1.1
+    # Ours: clearance kept between the base's footprint and the machine's on base paths, m.
+    base_clearance: float = 0.10
+    # Physics step, s (pybullet's default, 240 Hz).
+    time_step: float = 1.0 / 240.0
+
+    def __post_init__(self):
+        check_fields(self)
+        check_positive("base_speed", self.base_speed)
+        check_nonnegative("base_clearance", self.base_clearance)
+        check_range("time_step", self.time_step, 0.0, 0.01, lo_open=True)
+
+
 # ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/plan.py) ----
 
 
@@ -736,3 +921,106 @@ class SetupPlanParams:
         check_positive("cleaning_rate", self.cleaning_rate)
         if self.method not in ("milp", "dfbnb", "both"):
             raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {self.method!r}")
+
+
+# ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/sim/cell.py, mavac/sim/bimanual.py,
+# mavac/scrubbing/bimanual.py) ----
+
+
+def _cell_space() -> SetupSpaceParams:
+    # Ours (the paper's cell is not dimensioned): the part centre moves over a 0.30 x 0.30 m
+    # square between the arms, 0.45-0.75 m in front of the cleaning arm's base, its bottom
+    # 0.35 m above both bases; the holding arm presents it with its flange pointing up. Both
+    # arms reach that square (IK of the holding flange and of the pad pointing down), and no
+    # setup reaches a whole part, as in the paper (bowl 5 setups, hull 2).
+    return SetupSpaceParams(x_min=0.0, x_max=0.3, y_min=0.0, y_max=0.3, origin_x=0.45, origin_y=-0.15,
+                            table_z=0.35)
+
+
+def _cell_sampling() -> SamplingParams:
+    # Level 1 of hierarchical sampling keeps the paper's 36 = 3 x 3 x 4 setups (Table III) on
+    # the cell's 0.30 m square: 150 mm x 150 mm x 120 deg (ours); descent steps as for the Puma.
+    return SamplingParams(coarse_res_x=0.15, coarse_res_y=0.15)
+
+
+@dataclass(frozen=True)
+class BimanualCellParams:
+    """The two-arm cell of Kabir Sec. IX-C in simulation: a holding iiwa and a cleaning iiwa.
+
+    World frame = the cleaning arm's base frame (on the floor plate under joint 1, z up, x
+    towards the other arm). The holding arm's base sits ``arm_separation`` m along x, turned
+    by 180 deg so the arms face each other across the workspace. A setup ``(x, y, alpha)``
+    puts the part frame at ``Trans(origin_x + x, origin_y + y, table_z) Rz(alpha)`` in the
+    world (:func:`mavac.setups.reach.base_T_part` with ``space``), which the holding arm's
+    flange must reach through the fixed grasp ``flange_T_part = Trans(0, 0, grasp_offset)``.
+    """
+
+    # Ours: 1.2 m between the bases, so a part 0.45-0.75 m from one base is 0.45-0.75 m from
+    # the other, inside both arms' reach with the flange up (holder) and the pad down (cleaner).
+    arm_separation: float = 1.2
+    # Ours: a 60 mm adapter between the holding flange and the part frame (part z = flange z).
+    grasp_offset: float = 0.06
+    # Ours: a plastic bowl or a 3-D printed hull of ~20 cm weighs a few hundred grams.
+    part_mass: float = 0.3
+    # Ours: 120 mm from the cleaning flange to the pad face (holder and 10 mm pad).
+    tool_length: float = 0.12
+    space: SetupSpaceParams = field(default_factory=_cell_space)
+    sampling: SamplingParams = field(default_factory=_cell_sampling)
+    # Ours: 500 Hz. The impedance loop on the iiwa's light wrist diverged at pybullet's default
+    # 240 Hz (explicit damping on link 7's small inertia); 71 samples per 7 Hz period.
+    time_step: float = 0.002
+    # Ours: setup and approach motions at 0.5 rad/s on the joint that moves most (the iiwa 7's
+    # axis limits are 98-180 deg/s; a cautious half of the slowest).
+    joint_speed: float = 0.5
+    # Ours: joint PD gains (N m/rad, N m s/rad) of the holding arm and of free motions, on top
+    # of pinocchio's gravity compensation.
+    kp: float = 600.0
+    kd: float = 40.0
+    # Ours: rotational stiffness (N m/rad) and damping ratio of the cleaning arm's Cartesian
+    # impedance; translational stiffness in the tool plane is kappa of LissajousParams.
+    rot_stiffness: float = 150.0
+    damping_ratio: float = 0.7
+    # Ours: integral gain (1/s) of the explicit normal-force loop along tool z, tuned on the
+    # coupon stroke (tests/test_bimanual.py): 6/s left the mean contact force 36 % above f_n on
+    # the bowl's parameters (pad bouncing off after landing), 100/s tracks it within ~1 %.
+    force_gain: float = 100.0
+    # Ours: pybullet friction coefficient pad/part, the wet sponge on plastic of ScrubModel.friction.
+    friction: float = 0.4
+    # Ours: contact stiffness (N/m) and damping (N s/m) of the foam pad: 10 N compresses it 1 mm.
+    pad_stiffness: float = 1.0e4
+    pad_damping: float = 200.0
+    # Preston coefficient of the cell's measured wear, stain layers per (Pa x m of sliding). Ours,
+    # for the same reason as ScrubModel.preston (the paper's C_p thresholds inside the GPR
+    # bounds): the pad's measured sliding speed in pybullet (~0.1 m/s) is a third of what the
+    # analytic model assumes, and 1e-4 left C_p ~ 0 at every point we tried.
+    preston: float = 5.0e-4
+    # Ours: re-plan rounds after the planned passes (Kabir Sec. IX-C iterates "until there is no
+    # more stain left"; we bound it).
+    max_rounds: int = 3
+    # Ours: stain image size (pixels) of the camera view that measures C_p.
+    image_size: int = 128
+    # Ours: the part counts as clean when the residue is below this fraction of its stained pixels.
+    clean_residue: float = 0.02
+
+    def __post_init__(self):
+        check_fields(self)
+        for name in ("arm_separation", "grasp_offset", "part_mass", "tool_length", "time_step", "joint_speed",
+                     "kp", "kd", "rot_stiffness", "damping_ratio", "friction", "pad_stiffness", "pad_damping", "preston"):
+            check_positive(name, getattr(self, name))
+        check_nonnegative("force_gain", self.force_gain)
+        check_range("time_step", self.time_step, 0.0, 0.02, lo_open=True)
+        check_int("max_rounds", self.max_rounds, 0, 20)
+        check_int("image_size", self.image_size, 16, 1024)
+        check_unit("clean_residue", self.clean_residue)
+
+    @property
+    def world_T_cleaner(self):
+        """(4, 4) pose of the cleaning arm's base (identity: the world frame)."""
+        return np.eye(4)
+
+    @property
+    def world_T_holder(self):
+        """(4, 4) pose of the holding arm's base: ``arm_separation`` along x, facing -x."""
+        T = np.diag([-1.0, -1.0, 1.0, 1.0])
+        T[0, 3] = self.arm_separation
+        return T

@@ -117,7 +117,7 @@ def test_se2_to_matrix():
 
 
 def test_load_robot():
-    assert set(ROBOT_NAMES) == {"ur10_mobile", "puma560"}
+    assert set(ROBOT_NAMES) == {"ur10_mobile", "puma560", "iiwa7"}
     assert load_robot("puma560", tool_length=0.1).name == "puma560"
     with pytest.raises(ValueError, match="name"):
         load_robot("kuka")

@@ -77,3 +77,16 @@ def test_old_import_paths_still_work():
 
     assert se2_matrices is tf.se2_matrices and se2_to_matrix is tf.se2_to_matrix
     assert check_transforms is tf.check_transforms
+
+
+def test_look_at_points_the_optical_axis_at_the_target():
+    from mavac.geometry.transforms import look_at
+
+    T = look_at([1.0, -2.0, 1.5], [0.2, 0.1, 0.3])
+    z = T[:3, 2]
+    d = np.array([0.2, 0.1, 0.3]) - np.array([1.0, -2.0, 1.5])
+    assert np.allclose(z, d / np.linalg.norm(d))
+    assert np.allclose(T[:3, :3].T @ T[:3, :3], np.eye(3)) and np.linalg.det(T[:3, :3]) > 0
+    assert T[:3, 1] @ np.array([0.0, 0.0, 1.0]) < 0  # image y (down) points away from world up
+    with pytest.raises(ValueError, match="differ"):
+        look_at([0, 0, 0], [0, 0, 0])

@@ -1,3 +1,16 @@
-"""MAVAC online (Algorithm 1): dust detection from the guard poses, clustering into areas,
-approaches with RRT-Connect and vacuuming under impedance control. Not built yet: this package
-is where it will live (the offline plan it starts from is :mod:`mavac.inspection`)."""
+"""MAVAC online (Algorithm 1) in simulation, on the offline plan of :mod:`mavac.inspection`.
+
+One module per concept:
+
+* :mod:`~mavac.cleaning.heaps` -- dust heaps of a trial and their pybullet bodies;
+* :mod:`~mavac.cleaning.detection` -- HSV segmentation, blobs, back-projection to nodes D;
+* :mod:`~mavac.cleaning.filters` -- the paper's filters (depth, reach, duplicates);
+* :mod:`~mavac.cleaning.clustering` -- DBSCAN areas in a short visiting order;
+* :mod:`~mavac.cleaning.approach` -- eq. 5 approach points, IK, collision checks;
+* :mod:`~mavac.cleaning.motion` -- RRT-Connect arm motions against the machine;
+* :mod:`~mavac.cleaning.vacuum` -- linear moves under Cartesian impedance, suction;
+* :mod:`~mavac.cleaning.scene` -- the simulated cell;
+* :mod:`~mavac.cleaning.timing` -- base travel and the simulated time per activity;
+* :mod:`~mavac.cleaning.misses` -- why each uncleaned heap was missed;
+* :mod:`~mavac.cleaning.trial` -- ``run_trial``: the whole loop, scored.
+"""

@@ -163,3 +163,21 @@ def points_in_frame(a_T_b, points_a) -> np.ndarray:
 def vectors_in_frame(a_T_b, vectors_a) -> np.ndarray:
     """Directions of frame *a* expressed in frame *b*, ``R^T v``: (n, 3) -> (n, 3)."""
     return np.asarray(vectors_a, dtype=float) @ check_transform("a_T_b", a_T_b)[:3, :3]
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """``world_T_camera`` (4, 4) of a camera at ``eye`` looking at ``target``, OpenCV axes
+    (z forward, x right, y down), with ``up`` (world) pointing up in the image."""
+    eye, target = check_points("eye", eye)[0], check_points("target", target)[0]
+    z = target - eye
+    if np.linalg.norm(z) < 1e-12:
+        raise ValueError("eye and target must differ")
+    z = z / np.linalg.norm(z)
+    x = np.cross(z, np.asarray(up, float))
+    if np.linalg.norm(x) < 1e-9:
+        x = np.cross(z, [1.0, 0.0, 0.0])
+    x = x / np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = eye
+    return T

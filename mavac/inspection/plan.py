@@ -129,6 +129,10 @@ class PoseSet:
     def __len__(self) -> int:
         return int(len(self.poses))
 
+    def head(self, n: int) -> PoseSet:
+        """The first ``n`` poses (all when ``n >= len(self)``)."""
+        return PoseSet(*(getattr(self, f.name)[:n] for f in dataclasses.fields(self)))
+
     @classmethod
     def from_rows(cls, rows, n_elements: int, nq: int) -> PoseSet:
         """From ``(pose, spot, kind, target, world_T_camera, maneuverability, visible)`` tuples."""

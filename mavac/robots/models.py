@@ -4,6 +4,10 @@
   the UR10 of example-robot-data mounted at the centre of the top of a MiR200-sized box,
   carrying the vacuum tool (tube + sphere) and an Azure Kinect on the flange.
 * ``puma560``: Kabir et al.'s simulated Puma 560, built from Corke's standard DH table.
+* ``iiwa7``: stand-in for Kabir et al.'s KUKA LBR iiwa 7 R800 (Sec. IX-C): pybullet_data's
+  ``kuka_iiwa/model.urdf`` (the real LBR iiwa, the nearest model a dependency ships), loaded
+  into pinocchio from the same URDF that pybullet loads, with a flange frame and optionally
+  the abrasive pad tool appended.
 
 The root (universe) frame of every model is the robot *base* frame; its pose in the world is
 ``world_T_base`` (for the mobile robot: ``se2_to_matrix(x, y, theta)``, base frame on the
@@ -12,7 +16,9 @@ floor under the centre of the platform).
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import coal
 import example_robot_data
@@ -20,7 +26,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..geometry.transforms import se2_to_matrix  # noqa: F401  (re-exported: world_T_base of a spot)
-from ..validate import check_nonnegative
+from ..config import cache_dir
+from ..io import write_text
+from ..validate import check_nonnegative, check_positive
 from .kinematics import estimate_manipulability_max
 
 # MiR200 footprint and deck height (MiR200 datasheet: 890 x 580 mm, 352 mm high); MAVAC,
@@ -60,7 +68,16 @@ PUMA560_QLIM_DEG = np.array(
 # Robotics Toolbox for Python (models/DH/Puma560.py): "from mounting surface to shoulder axis".
 PUMA560_PEDESTAL_HEIGHT = 0.672
 
-ROBOT_NAMES = ("ur10_mobile", "puma560")
+ROBOT_NAMES = ("ur10_mobile", "puma560", "iiwa7")
+
+# KUKA LBR iiwa datasheet: the flange sits 126 mm past axis 6; pybullet_data's URDF puts joint 7
+# 81 mm past it, so the flange is 45 mm past joint 7's origin along its axis.
+IIWA_FLANGE_OFFSET = 0.045
+# Abrasive pad tool (ours, the paper gives none): a 0.2 kg holder of radius 20 mm and a pad
+# disc 10 mm thick; the disc's diameter is the pad width (ToolpathParams.tool_width_m).
+PAD_THICKNESS = 0.01
+PAD_HOLDER_RADIUS = 0.02
+PAD_MASS = 0.2
 
 
 @dataclass
@@ -83,6 +100,8 @@ class RobotModel:
     dh : (nq, 3) float or None
         Standard DH table (a, d, alpha) when the model was built from one (enables the
         closed-form inverse kinematics).
+    urdf_path : str or None
+        The URDF the model was built from, when it was (pybullet loads the same file).
     manipulability_max : float or None
         Normaliser of the Yoshikawa manipulability at ``tool_frame`` (see
         ``kinematics.maneuverability``), estimated once per model.
@@ -105,6 +124,7 @@ class RobotModel:
     notes: str = ""
     dh: np.ndarray | None = None
     manipulability_max: float | None = None
+    urdf_path: str | None = None
     # derived data (kinematic chains...), each entry tied to the pinocchio model it came from
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
     _build: tuple | None = field(default=None, init=False, repr=False, compare=False)
@@ -347,9 +367,107 @@ def puma560(tool_length: float = 0.0) -> RobotModel:
     return _finish(robot, "puma560", {"tool_length": tool_length})
 
 
+def _iiwa_tool_urdf(tool_length: float, pad_width: float) -> str:
+    """URDF links appended to link 7: the flange frame and, if ``tool_length > 0``, the pad tool.
+
+    Every link has an explicit inertial so that pybullet and pinocchio agree on the masses
+    (pybullet gives a link without one a mass of 1 kg).
+    """
+    tiny = '<inertial><mass value="1e-6"/><inertia ixx="1e-9" ixy="0" ixz="0" iyy="1e-9" iyz="0" izz="1e-9"/></inertial>'
+    out = (f'<joint name="flange_joint" type="fixed"><parent link="lbr_iiwa_link_7"/><child link="flange"/>'
+           f'<origin xyz="0 0 {IIWA_FLANGE_OFFSET}"/></joint><link name="flange">{tiny}</link>')
+    if tool_length <= 0:
+        return out
+    holder = tool_length - PAD_THICKNESS
+    i_xx = PAD_MASS * (3 * PAD_HOLDER_RADIUS**2 + tool_length**2) / 12
+    i_zz = PAD_MASS * PAD_HOLDER_RADIUS**2 / 2
+    r = pad_width / 2
+    return out + (
+        f'<joint name="tool_joint" type="fixed"><parent link="flange"/><child link="tool"/>'
+        f'<origin xyz="0 0 0"/></joint>'
+        f'<link name="tool"><inertial><origin xyz="0 0 {tool_length / 2}"/><mass value="{PAD_MASS}"/>'
+        f'<inertia ixx="{i_xx}" ixy="0" ixz="0" iyy="{i_xx}" iyz="0" izz="{i_zz}"/></inertial>'
+        f'<visual><origin xyz="0 0 {holder / 2}"/><geometry><cylinder radius="{PAD_HOLDER_RADIUS}" '
+        f'length="{holder}"/></geometry></visual>'
+        f'<collision><origin xyz="0 0 {holder / 2}"/><geometry><cylinder radius="{PAD_HOLDER_RADIUS}" '
+        f'length="{holder}"/></geometry></collision></link>'
+        f'<joint name="pad_joint" type="fixed"><parent link="tool"/><child link="pad"/>'
+        f'<origin xyz="0 0 {holder}"/></joint>'
+        f'<link name="pad">{tiny}<visual><origin xyz="0 0 {PAD_THICKNESS / 2}"/><geometry><cylinder radius="{r}" '
+        f'length="{PAD_THICKNESS}"/></geometry><material name="pad"><color rgba="0.2 0.5 0.2 1"/></material>'
+        f'</visual><collision><origin xyz="0 0 {PAD_THICKNESS / 2}"/><geometry><cylinder radius="{r}" '
+        f'length="{PAD_THICKNESS}"/></geometry></collision></link>'
+        f'<joint name="pad_face_joint" type="fixed"><parent link="pad"/><child link="pad_face"/>'
+        f'<origin xyz="0 0 {PAD_THICKNESS}"/></joint><link name="pad_face">{tiny}</link>')
+
+
+def iiwa_urdf(tool_length: float = 0.0, pad_width: float = 0.03) -> Path:
+    """pybullet_data's ``kuka_iiwa/model.urdf`` with absolute mesh paths, a ``flange`` link and,
+    when ``tool_length > 0``, the pad tool (``tool`` holder, ``pad`` disc, ``pad_face`` frame
+    ``tool_length`` m past the flange), written once into :func:`mavac.config.cache_dir`.
+
+    Parameters
+    ----------
+    tool_length : float, metres, >= 0
+        Flange to pad face; 0 for a bare flange (the holding arm).
+    pad_width : float, metres, > 0
+        Pad diameter (only with a tool).
+    """
+    import pybullet_data
+
+    tool_length = float(check_nonnegative("tool_length", tool_length))
+    pad_width = float(check_positive("pad_width", pad_width))
+    if 0 < tool_length <= PAD_THICKNESS:
+        raise ValueError(f"tool_length must be 0 or > the pad thickness {PAD_THICKNESS} m, got {tool_length}")
+    folder = Path(pybullet_data.getDataPath()) / "kuka_iiwa"
+    text = (folder / "model.urdf").read_text()
+    text = text.replace('filename="meshes/', f'filename="{folder}/meshes/')
+    text = text.replace("</robot>", _iiwa_tool_urdf(tool_length, pad_width) + "\n</robot>")
+    key = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = cache_dir() / "urdf" / f"iiwa7_{key}.urdf"
+    if not path.is_file() or path.read_text() != text:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_text(text, path)
+    return path
+
+
+def iiwa7(tool_length: float = 0.0, pad_width: float = 0.03) -> RobotModel:
+    """KUKA LBR iiwa from pybullet_data's ``kuka_iiwa/model.urdf`` (stand-in for the iiwa 7 R800).
+
+    Base frame = the URDF's ``lbr_iiwa_link_0`` (on the mounting plate, z up along joint 1).
+    ``tool_frame`` is ``pad_face`` (centre of the pad's contact face, z out of the tool) when
+    ``tool_length > 0``, else ``flange``. Joint limits are the URDF's (+-170, +-120, +-170,
+    +-120, +-170, +-120, +-175 deg); collision geometry = the URDF's link meshes and tool
+    cylinders (coal BVHs).
+
+    Parameters
+    ----------
+    tool_length : float, metres, >= 0
+        Flange to pad face (0: the bare flange, for the holding arm).
+    pad_width : float, metres
+        Pad diameter.
+    """
+    path = iiwa_urdf(tool_length, pad_width)
+    model = pin.buildModelFromUrdf(str(path))
+    model.name = "iiwa7"
+    collision = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION)
+    visual = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.VISUAL)
+    tool = "pad_face" if tool_length > 0 else "flange"
+    # Elbow bent, flange 0.5 m in front of the base at 0.55 m height, pointing down (ours).
+    q_home = np.array([0.0, 0.6, 0.0, -1.4, 0.0, 1.1, 0.0])
+    robot = RobotModel(
+        name="iiwa7", model=model, collision_model=collision, visual_model=visual, tool_frame=tool,
+        camera_frame=None, q_home=q_home, urdf_path=str(path),
+        notes=("KUKA LBR iiwa from pybullet_data kuka_iiwa/model.urdf (stand-in for the paper's iiwa 7 R800), "
+               f"flange {IIWA_FLANGE_OFFSET} m past joint 7; tool_length = {tool_length} m to the pad face, "
+               f"pad width {pad_width} m."),
+    )
+    return _finish(robot, "iiwa7", {"tool_length": tool_length, "pad_width": pad_width})
+
+
 def load_robot(name: str, **kwargs) -> RobotModel:
-    """Robot by name: ``"ur10_mobile"`` or ``"puma560"`` (kwargs go to the builder)."""
-    builders = {"ur10_mobile": ur10_mobile, "puma560": puma560}
+    """Robot by name: ``"ur10_mobile"``, ``"puma560"`` or ``"iiwa7"`` (kwargs go to the builder)."""
+    builders = {"ur10_mobile": ur10_mobile, "puma560": puma560, "iiwa7": iiwa7}
     if name not in builders:
         raise ValueError(f"name must be one of {ROBOT_NAMES}, got {name!r}")
     return builders[name](**kwargs)

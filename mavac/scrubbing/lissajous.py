@@ -37,11 +37,15 @@ class Overlay(NamedTuple):
     positions : (m, 3) float, metres -- nominal path plus the impedance deviation F / kappa.
     forces : (m, 3) float, newtons -- commanded force in the world frame: oscillation in the
         tool XY plane plus ``f_n`` along tool z.
+    nominal : (m, 3) float, metres -- the nominal path at the same times (no oscillation).
+    rotations : (m, 3, 3) float -- tool frames at the same times (world).
     """
 
     t: np.ndarray
     positions: np.ndarray
     forces: np.ndarray
+    nominal: np.ndarray | None = None
+    rotations: np.ndarray | None = None
 
 
 def lissajous_force(t, params: LissajousParams = LissajousParams()) -> np.ndarray:
@@ -154,7 +158,7 @@ def overlay_path(path, frames, params: LissajousParams = LissajousParams(), *, s
     offset_tool = np.column_stack([offset_xy, np.zeros(len(t))])
     positions = nominal + np.einsum("nij,nj->ni", R, offset_tool)
     forces = np.einsum("nij,nj->ni", R, force_tool)
-    return Overlay(t, positions, forces)
+    return Overlay(t, positions, forces, nominal, R)
 
 
 def end_overshoot(path, positions) -> tuple[float, float]:

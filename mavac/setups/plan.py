@@ -19,6 +19,7 @@ import numpy as np
 from ..geometry.stain_marking import oversized_patches
 from ..io import write_json
 from ..params import SetupPlanParams
+from ..validate import check_callable
 from ..planning.setcover import (
     execution_time_area_passes,
     setup_costs_from_times,
@@ -26,7 +27,7 @@ from ..planning.setcover import (
 )
 from ..robots.models import puma560
 from .diagnose import unreachable_causes, unreachable_message
-from .reach import CountingReach, PartReach, reach_targets
+from .reach import CountingReach, FeasibleReach, PartReach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
 from .viewer import setup_plan_html
 
@@ -149,7 +150,7 @@ class SetupPlan:
         return "\n".join(lines)
 
 
-def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> SetupPlan:
+def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feasible=None) -> SetupPlan:
     """Plan the setups that clean a part's stain (Kabir et al. 2017).
 
     Parameters
@@ -163,6 +164,10 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
         Default ``puma560(tool_length=params.reach.tool_length)``; its base frame is where
         :class:`mavac.params.SetupSpaceParams` places the part.
     params : SetupPlanParams, optional
+    feasible : callable, optional
+        ``feasible(setups (k, 3)) -> (k,) bool``: setups that exist at all (e.g. the holding
+        arm of a two-arm cell can present the part there, :class:`mavac.setups.held.HeldSetups`);
+        the others reach nothing and are dropped, and a warning says how many.
 
     Returns
     -------
@@ -193,17 +198,13 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
     if robot is None:
         robot = puma560(tool_length=params.reach.tool_length)
     mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
-    reach = CountingReach(PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach,
-                                    part_mesh=mesh))
-
-    if params.sampling_method == "uniform":
-        sampled = uniform_sampling(reach, params.space)
-    elif params.sampling_method == "hierarchical":
-        sampled = hierarchical_sampling(reach, params.space, params.sampling, variant=params.variant)
-    else:
-        sampled = random_sampling(reach, params.space, params.sampling, variant=params.variant, seed=params.seed)
+    reach_fn = _reach_fn(robot, vertices, normals, params, mesh, feasible)
+    reach = CountingReach(reach_fn)
+    sampled = _sample(reach, params)
     cover = sampled.nondominated_cover
     setups = sampled.nondominated_setups
+    if getattr(reach_fn, "dropped", 0):
+        notes.append(f"{reach_fn.dropped} of {reach.n_rfc} sampled setups dropped: {_why_dropped(feasible)}")
     if len(setups) == 0:
         causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
         return _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
@@ -227,6 +228,28 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
         n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
         certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
         uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes)
+
+
+def _sample(reach, params: SetupPlanParams):
+    """Candidate setups by the configured sampling method, counted in ``reach.n_rfc``."""
+    if params.sampling_method == "uniform":
+        return uniform_sampling(reach, params.space)
+    if params.sampling_method == "hierarchical":
+        return hierarchical_sampling(reach, params.space, params.sampling, variant=params.variant)
+    return random_sampling(reach, params.space, params.sampling, variant=params.variant, seed=params.seed)
+
+
+def _reach_fn(robot, vertices, normals, params, mesh, feasible):
+    """The part's reach test, reaching nothing from setups ``feasible`` refuses (when given)."""
+    reach_fn = PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach, part_mesh=mesh)
+    if feasible is None:
+        return reach_fn
+    return FeasibleReach(reach_fn, check_callable("feasible", feasible, "(setups (k, 3)) -> (k,) bool"))
+
+
+def _why_dropped(feasible) -> str:
+    """The feasibility test's own account of what it refused, if it keeps one."""
+    return str(getattr(feasible, "summary", lambda: "refused by the feasibility test")())
 
 
 def _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes):

@@ -246,7 +246,7 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
             pos = np.stack([cs * p[:, 0] - ss * p[:, 1] + tx[si], ss * p[:, 0] + cs * p[:, 1] + ty[si],
                             p[:, 2] + space.table_z], axis=1)
             ax = np.stack([cs * a[:, 0] - ss * a[:, 1], ss * a[:, 0] + cs * a[:, 1], a[:, 2]], axis=1)
-            ok = ik_axis(robot, pos, ax).success
+            ok = ik_axis(robot, pos, ax, n_restarts=params.ik_restarts).success
             if params.check_collision and ok.any():
                 T = base_T_part(setups, space) if T is None else T
                 ok[ok] = _collision_free(robot, pos[ok], ax[ok], si[ok], T, params, part_mesh)
@@ -258,7 +258,7 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
 def _collision_free(robot, pos, ax, setup_index, base_T_parts, params, part_mesh) -> np.ndarray:
     """Arm-vs-part check at a stand-off of ``collision_standoff`` along the normal (the tool
     tip touches the surface at the target itself)."""
-    lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax)
+    lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax, n_restarts=params.ik_restarts)
     free = lifted.success.copy()
     checker = CollisionChecker(robot, part_mesh, margin=params.collision_margin)
     for j in np.unique(setup_index):
@@ -296,6 +296,44 @@ class PartReach:
     @property
     def n_patches(self) -> int:
         return self.targets.n_patches
+
+
+class FeasibleReach:
+    """A reach function that reaches nothing from setups a ``feasible`` test refuses.
+
+    Used when something other than the reach test decides whether a setup exists at all, e.g.
+    the holding arm of a two-arm cell must present the part there
+    (:class:`mavac.setups.held.HeldSetups`): a refused setup covers no patch, so the planner
+    drops it; ``dropped`` counts the refused setups (each asked once through
+    :class:`CountingReach`).
+
+    Parameters
+    ----------
+    reach_fn : callable
+        ``reach_fn(setups (k, 3)) -> (k, n) bool``.
+    feasible : callable
+        ``feasible(setups (k, 3)) -> (k,) bool``.
+    """
+
+    def __init__(self, reach_fn: Callable[[np.ndarray], np.ndarray], feasible: Callable[[np.ndarray], np.ndarray]):
+        self.reach_fn = reach_fn
+        self.feasible = feasible
+        self.dropped = 0
+
+    def __call__(self, setups) -> np.ndarray:
+        setups = check_points("setups", setups, 3)
+        ok = np.asarray(self.feasible(setups), dtype=bool).reshape(-1)
+        if ok.shape != (len(setups),):
+            raise ValueError(f"feasible must return a ({len(setups)},) bool array, got shape {ok.shape}")
+        out = np.zeros((len(setups), self.n_patches), dtype=bool)
+        if ok.any():
+            out[ok] = self.reach_fn(setups[ok])
+        self.dropped += int((~ok).sum())
+        return out
+
+    @property
+    def n_patches(self) -> int:
+        return int(self.reach_fn.n_patches)
 
 
 def reach_sweep(reach: Callable[[np.ndarray], np.ndarray], setups, *, n_jobs: int | None = None,

@@ -8,6 +8,11 @@
   joint PD, computed torque, Cartesian impedance, joint-trajectory tracking.
 * :mod:`mavac.sim.camera` -- RGB-D + segmentation images with the TinyRenderer, metric depth,
   intrinsics from the field of view.
+* :mod:`mavac.sim.cell` -- kinematics of Kabir et al.'s two-arm iiwa cell: placement, fixed
+  grasp, the holding arm's IK for a part pose, room for the part between the arms.
+* :mod:`mavac.sim.bimanual` -- that cell in pybullet: the held part, collision-free setup
+  motions, scrubbing under force control with the Lissajous overlay, Preston wear from the
+  measured contact (SIMULATED), stain overlays and camera snapshots.
 * :mod:`mavac.sim.wear` -- the SIMULATED Preston-law stain removal that stands in for Kabir et
   al.'s physical scrubbing (our model, not the papers' physics); :mod:`mavac.sim.scrub`.
 

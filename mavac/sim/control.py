@@ -66,15 +66,13 @@ def computed_torques(model, q, dq, q_des, dq_des, ddq_des=None, *, kp, kd, data=
     q, dq = _vec("q", q, model.nq), _vec("dq", dq, n)
     q_des, dq_des = _vec("q_des", q_des, model.nq), _vec("dq_des", dq_des, n)
     acc = np.zeros(n) if ddq_des is None else _vec("ddq_des", ddq_des, n)
-    acc = acc + _gains("kp", kp, n) * (q_des - q) + _gains("kd", kd, n) * (dq_des - dq)
     data = model.createData() if data is None else data
-    return np.array(pin.rnea(model, data, q, dq, acc))
+    return computed_torques_step(model, data, q, dq, q_des, dq_des, acc, _gains("kp", kp, n), _gains("kd", kd, n))
 
 
-def pose_error(world_T_target, world_T_frame) -> np.ndarray:
-    """(6,) ``[p_d - p, log3(R_d R^T)]``: translation (m) and rotation vector (rad), world axes."""
-    Td, T = check_transform("world_T_target", world_T_target), check_transform("world_T_frame", world_T_frame)
-    return np.concatenate([Td[:3, 3] - T[:3, 3], pin.log3(Td[:3, :3] @ T[:3, :3].T)])
+def computed_torques_step(model, data, q, dq, q_des, dq_des, ddq_des, kp, kd) -> np.ndarray:
+    """:func:`computed_torques` without input checks, for control loops (arrays (nv,) float)."""
+    return np.array(pin.rnea(model, data, q, dq, ddq_des + kp * (q_des - q) + kd * (dq_des - dq)))
 
 
 def cartesian_impedance_torques(model, data, q, dq, frame_id, world_T_target, *, stiffness, damping,
@@ -105,11 +103,20 @@ def cartesian_impedance_torques(model, data, q, dq, frame_id, world_T_target, *,
     if np.any(K < 0) or np.any(D < 0):
         raise ValueError("stiffness and damping must be >= 0")
     ff = np.zeros(6) if wrench_ff is None else _vec("wrench_ff", wrench_ff, 6)
+    target = check_transform("world_T_target", world_T_target)
+    return impedance_step(model, data, q, dq, int(frame_id), target, K, D, ff)
+
+
+def impedance_step(model, data, q, dq, frame_id: int, world_T_target, K, D, wrench_ff=None) -> np.ndarray:
+    """:func:`cartesian_impedance_torques` without input checks, for control loops."""
     pin.forwardKinematics(model, data, q)
     pin.updateFramePlacements(model, data)
-    J = pin.computeFrameJacobian(model, data, q, int(frame_id), pin.LOCAL_WORLD_ALIGNED)
-    error = pose_error(world_T_target, data.oMf[int(frame_id)].homogeneous)
-    wrench = K * error - D * (J @ dq) + ff
+    J = pin.computeFrameJacobian(model, data, q, frame_id, pin.LOCAL_WORLD_ALIGNED)
+    M = data.oMf[frame_id]
+    error = np.concatenate([world_T_target[:3, 3] - M.translation, pin.log3(world_T_target[:3, :3] @ M.rotation.T)])
+    wrench = K * error - D * (J @ dq)
+    if wrench_ff is not None:
+        wrench = wrench + wrench_ff
     return J.T @ wrench + np.array(pin.computeGeneralizedGravity(model, data, q))
 
 
@@ -220,18 +227,19 @@ def follow_joint_trajectory(world, robot, model, qs, *, dt=None, kp=400.0, kd=40
     check_range("max_settle_steps", max_settle_steps, 0, 10**7)
     q_des, dq_des, ddq_des = time_parametrise(qs, max_velocity=max_velocity, max_acceleration=max_acceleration, dt=dt)
     data = model.createData()
+    kp, kd = _gains("kp", kp, model.nv), _gains("kd", kd, model.nv)
     robot.enable_torque_control()
     rows: list = []
-    n_total = len(q_des)
+    n_total, zero = len(q_des), np.zeros(model.nv)
     for k in range(n_total + int(max_settle_steps)):
         i = min(k, n_total - 1)
-        q, dq = robot.q(), robot.dq()
+        q, dq = robot.state()
         if k >= n_total and np.max(np.abs(q - q_des[-1])) <= settle_tol and np.max(np.abs(dq)) < 10 * settle_tol:
             break
-        ref_v, ref_a = (dq_des[i], ddq_des[i]) if k < n_total else (np.zeros(model.nv), np.zeros(model.nv))
-        tau = computed_torques(model, q, dq, q_des[i], ref_v, ref_a, kp=kp, kd=kd, data=data)
-        robot.apply_torques(tau)
-        world.step()
+        ref_v, ref_a = (dq_des[i], ddq_des[i]) if k < n_total else (zero, zero)
+        tau = computed_torques_step(model, data, q, dq, q_des[i], ref_v, ref_a, kp, kd)
+        robot.apply_torques_unchecked(tau)
+        world.step_once()
         if k % max(1, int(log_every)) == 0:
             rows.append((k * dt, q, q_des[i], tau))
     steps = k + 1

@@ -251,6 +251,10 @@ class SimWorld:
         for _ in range(check_int("n", n, 0)):
             self._p.stepSimulation(physicsClientId=self.client)
 
+    def step_once(self) -> None:
+        """One physics step, no checks (control loops)."""
+        self._p.stepSimulation(physicsClientId=self.client)
+
     def contact_forces(self, body_a: int, body_b: int | None = None, *, link_a: int | None = None) -> ContactSummary:
         """Sum of normal forces (N), count, positions (k, 3), normals (k, 3) from
         ``getContactPoints`` of the last step (``body_b`` None: against every body)."""
@@ -319,6 +323,11 @@ class SimRobot:
         states = self.world._p.getJointStates(self.body, self.joint_indices, physicsClientId=self._c)
         return np.array([s[1] for s in states], dtype=float)
 
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """(q, dq) in one pybullet call."""
+        states = self.world._p.getJointStates(self.body, self.joint_indices, physicsClientId=self._c)
+        return np.array([s[0] for s in states], dtype=float), np.array([s[1] for s in states], dtype=float)
+
     def _check_q(self, name: str, q) -> np.ndarray:
         a = check_array(name, q, float).reshape(-1)
         if a.shape != (len(self.joint_indices),) or not np.all(np.isfinite(a)):
@@ -343,6 +352,20 @@ class SimRobot:
         p = self.world._p
         p.setJointMotorControlArray(self.body, self.joint_indices, p.TORQUE_CONTROL, forces=a.tolist(),
                                     physicsClientId=self._c)
+
+    def apply_torques_unchecked(self, tau) -> None:
+        """:meth:`apply_torques` without input checks (control loops; tau (nq,) float)."""
+        p = self.world._p
+        p.setJointMotorControlArray(self.body, self.joint_indices, p.TORQUE_CONTROL, forces=tau.tolist(),
+                                    physicsClientId=self._c)
+
+    def link_position(self, link_name: str) -> np.ndarray:
+        """(3,) world position of a link frame's origin (cheaper than :meth:`world_T_link`)."""
+        i = self.link_index(link_name)
+        if i < 0:
+            return self.world_T_link(link_name)[:3, 3]
+        state = self.world._p.getLinkState(self.body, i, computeForwardKinematics=True, physicsClientId=self._c)
+        return np.array(state[4], dtype=float)
 
     def link_index(self, link_name: str) -> int:
         """pybullet link index of ``link_name`` (-1 for the root link)."""

@@ -1,0 +1,77 @@
+"""Why each uncleaned heap was missed (MAVAC, Results, names two causes anecdotally; we measure).
+
+Per heap, the trial records how far it got; an uncleaned heap's cause is the furthest stage:
+
+1. ``never in view``: never inside the view frustum of a guard image;
+2. ``hidden``: inside a frustum but never drawn (occluded by the machine or the robot);
+3. ``filtered``: drawn in an image but no node of it survived detection and the filters (blob
+   too small, depth invalid or beyond the detection limit, out of reach, duplicate);
+4. ``no approach found``: its area had no collision-free, reachable approach point (eq. 5);
+5. ``planner failed``: approach configurations existed, RRT-Connect found no path to any;
+6. ``vacuum missed``: the tool was driven into its area but never came within the suction
+   radius of it.
+
+The ground truth used here (pybullet's segmentation, true heap positions) serves scoring only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+CAUSES = ("never in view", "hidden", "filtered", "no approach found", "planner failed", "vacuum missed")
+#: stages a heap can reach, in order (the cause of a miss is the furthest one)
+STAGES = ("in_frustum", "in_image", "no_approach", "planner_failed", "attempted")
+
+
+@dataclass
+class HeapEvents:
+    """(n,) bool per stage, one entry per heap (see the module docstring)."""
+
+    in_frustum: np.ndarray
+    in_image: np.ndarray
+    no_approach: np.ndarray
+    planner_failed: np.ndarray
+    attempted: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int) -> HeapEvents:
+        return cls(*(np.zeros(n, dtype=bool) for _ in STAGES))
+
+    def mark(self, stage: str, heaps) -> None:
+        """Set ``stage`` for heap indices ``heaps`` (negative indices = unmatched, ignored)."""
+        idx = np.asarray(heaps, dtype=np.int64).reshape(-1)
+        getattr(self, stage)[idx[idx >= 0]] = True
+
+
+def miss_causes(events: HeapEvents, cleaned) -> np.ndarray:
+    """(n,) str: the cause of each uncleaned heap, ``""`` for cleaned ones."""
+    cleaned = np.asarray(cleaned, dtype=bool)
+    cause = np.full(len(cleaned), CAUSES[0], dtype="<U17")
+    cause[events.in_frustum] = "hidden"
+    cause[events.in_image] = "filtered"
+    cause[events.no_approach] = "no approach found"
+    cause[events.planner_failed] = "planner failed"
+    cause[events.attempted] = "vacuum missed"
+    cause[cleaned] = ""
+    return cause
+
+
+def cause_counts(causes) -> dict:
+    """Count of each cause (every cause present, zeros included)."""
+    c = np.asarray(causes)
+    return {name: int(np.count_nonzero(c == name)) for name in CAUSES}
+
+
+def in_frustum(points, world_T_camera, K, width: int, height: int, near: float, far: float) -> np.ndarray:
+    """(n,) bool: world points that project inside the image between ``near`` and ``far`` (m)
+    (camera pose in the OpenCV convention)."""
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    T = np.asarray(world_T_camera, dtype=float)
+    c = (P - T[:3, 3]) @ T[:3, :3]
+    z = c[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = K[0, 0] * c[:, 0] / z + K[0, 2]
+        v = K[1, 1] * c[:, 1] / z + K[1, 2]
+    return (z > near) & (z < far) & (u >= -0.5) & (u <= width - 0.5) & (v >= -0.5) & (v <= height - 0.5)

@@ -1,0 +1,91 @@
+"""The simulated cell of an online trial: machine, floor, dust heaps and the mobile manipulator
+in one :class:`mavac.sim.world.SimWorld`, plus the coal collision checker the planners use.
+
+The base is moved kinematically (teleported to each spot); the arm is torque-controlled.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry.machines import Machine
+from ..params import OnlineParams
+from ..robots.collision import CollisionChecker
+from ..sim.control import follow_joint_trajectory
+from ..sim.urdf import robot_urdf
+from .heaps import DustField
+
+#: machine colour in the images (grey: saturation 0, never green)
+MACHINE_RGBA = (0.55, 0.55, 0.58, 1.0)
+
+
+@dataclass
+class Cell:
+    """Everything a trial drives.
+
+    Attributes
+    ----------
+    world : SimWorld
+    robot : RobotModel
+    sim : SimRobot
+    model, data : pinocchio.Model, pinocchio.Data
+    tool_frame : str
+    tool_id : int
+        pinocchio frame id of the tool centre.
+    machine_body : int
+    dust : DustField
+    checker : CollisionChecker
+        Machine + floor, with the approach clearance margin, at ``world_T_base``.
+    world_T_base : (4, 4) float
+    q_cmd : (nq,) float
+        Last commanded configuration (planning starts here).
+    """
+
+    world: object
+    robot: object
+    sim: object
+    model: object
+    data: object
+    tool_frame: str
+    tool_id: int
+    machine_body: int
+    dust: DustField
+    checker: CollisionChecker
+    world_T_base: np.ndarray
+    q_cmd: np.ndarray
+
+    def move_base(self, world_T_base) -> None:
+        """Teleport the mobile base (kinematic drive) and move the checker with it."""
+        self.world_T_base = np.array(world_T_base, dtype=float)
+        self.sim.set_base_pose(self.world_T_base)
+        self.checker.set_base(self.world_T_base)
+
+    def track(self, path, params: OnlineParams) -> float:
+        """Follow a joint path in torque control; returns its simulated duration, s."""
+        path = np.vstack([self.sim.q()[None], np.asarray(path, dtype=float)])
+        log = follow_joint_trajectory(self.world, self.sim, self.model, path,
+                                      max_velocity=params.approach.max_joint_velocity,
+                                      max_acceleration=params.approach.max_joint_acceleration, log_every=10**9)
+        self.q_cmd = np.array(path[-1], dtype=float)
+        return log.duration
+
+    def world_T_tool(self) -> np.ndarray:
+        return self.sim.world_T_link(self.tool_frame)
+
+
+def build_cell(world, machine: Machine, robot, heaps, params: OnlineParams, world_T_base) -> Cell:
+    """Floor, machine (static concave mesh), heaps and the robot at ``world_T_base`` in ``q_home``."""
+    world.add_floor()
+    machine_body = world.add_static_mesh(machine.mesh.vertices, machine.mesh.faces, rgba=MACHINE_RGBA)
+    dust = DustField.add_to(world, heaps, params.dust)
+    names = [robot.model.names[j] for j in range(1, robot.model.njoints)]
+    sim = world.add_robot(robot_urdf(robot), world_T_base=world_T_base, joint_names=names)
+    sim.reset_q(robot.q_home)
+    sim.enable_torque_control()
+    checker = CollisionChecker(robot, machine.mesh, world_T_base=world_T_base,
+                               margin=params.approach.collision_margin, floor=True)
+    model = robot.model
+    return Cell(world, robot, sim, model, model.createData(), robot.tool_frame, model.getFrameId(robot.tool_frame),
+                machine_body, dust, checker, np.array(world_T_base, dtype=float), np.array(robot.q_home, dtype=float))

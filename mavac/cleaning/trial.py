@@ -1,0 +1,284 @@
+"""One MAVAC online trial in simulation (Algorithm 1) on an offline plan.
+
+For every pose ``G_m`` of the plan's pose set T, in order: drive the base to its spot (arm
+folded home first), move the arm to the guard configuration (RRT-Connect, tracked in torque
+control), take an RGB-D image, detect dust, filter the nodes, cluster them into areas and, per
+area, find an approach point (eq. 5), plan to it, vacuum its nodes under impedance control and
+return to the approach point. The result scores the heaps (cleaned or the cause of the miss),
+detection precision and recall, and the simulated time per activity.
+
+A trial never raises for a hard scene: no heaps, an empty plan, nothing in view, no dust
+detected or an unreachable area give a result (0 % where nothing was cleaned) with the reason.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..geometry.machines import Machine
+from ..geometry.transforms import se2_to_matrix
+from ..params import OnlineParams
+from ..robots.models import ur10_mobile
+from ..sim.camera import intrinsics_from_fov, mavac_T_opencv, render_rgbd
+from ..sim.world import SimWorld
+from ..validate import check_instance, check_int
+from .approach import find_approach
+from .clustering import areas_from_nodes
+from .detection import detect_dust, match_nodes
+from .filters import FILTERS, filter_nodes
+from .heaps import heaps_for_trial
+from .misses import CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes
+from .motion import plan_arm_motion
+from .scene import build_cell
+from .timing import TrialTimes, base_path_length
+from .vacuum import vacuum_area
+
+#: Ours: render clipping planes, m (the Kinect body around the camera origin is nearer than
+#: ``NEAR``; the depth filter, not the far plane, bounds detection).
+NEAR, FAR = 0.05, 5.0
+
+
+@dataclass
+class TrialResult:
+    """Outcome of :func:`run_trial`.
+
+    Attributes
+    ----------
+    machine : str
+    seed : int
+    heaps : (n, 3) float
+        True heap positions, m.
+    cleaned : (n,) bool
+    causes : (n,) str
+        Cause of each miss (:data:`mavac.cleaning.misses.CAUSES`), ``""`` where cleaned.
+    detected : int
+        Nodes with a position (HSV blob with depth), over all images.
+    true_positives : int
+        Of those, nodes within ``match_radius`` of a true heap.
+    recalled : int
+        Heaps matched by at least one node.
+    times : TrialTimes
+    peak_forces : list of float, N
+        Peak machine contact force of every vacuuming move.
+    filtered : dict
+        Nodes dropped per filter.
+    areas, areas_cleaned : int
+    guards : int
+        Poses visited.
+    reason : str
+        Why nothing could be done (no heaps, empty plan), else ``""``.
+    warnings : list of str
+    wall_s : float
+        Wall time of the trial, s (non-deterministic, like ``times.planning_wall_s`` and
+        ``rrt_approach_seconds``).
+    rrt_approach_seconds : list of float
+        Wall time of every RRT-Connect approach plan, s.
+    """
+
+    machine: str
+    seed: int
+    heaps: np.ndarray
+    cleaned: np.ndarray
+    causes: np.ndarray
+    detected: int = 0
+    true_positives: int = 0
+    recalled: int = 0
+    times: TrialTimes = field(default_factory=TrialTimes)
+    peak_forces: list = field(default_factory=list)
+    filtered: dict = field(default_factory=lambda: {name: 0 for name in FILTERS})
+    areas: int = 0
+    areas_cleaned: int = 0
+    guards: int = 0
+    reason: str = ""
+    warnings: list = field(default_factory=list)
+    wall_s: float = 0.0
+    rrt_approach_seconds: list = field(default_factory=list)
+
+    @property
+    def n_heaps(self) -> int:
+        return int(len(self.heaps))
+
+    @property
+    def n_cleaned(self) -> int:
+        return int(np.count_nonzero(self.cleaned))
+
+    @property
+    def cleaning_pct(self) -> float:
+        """Cleaned heaps in per cent (0 when there are none)."""
+        return 100.0 * self.n_cleaned / self.n_heaps if self.n_heaps else 0.0
+
+    @property
+    def precision(self) -> float:
+        """Detected nodes that are real heaps (NaN when nothing was detected)."""
+        return self.true_positives / self.detected if self.detected else float("nan")
+
+    @property
+    def recall(self) -> float:
+        """Heaps detected at least once (NaN when there are no heaps)."""
+        return self.recalled / self.n_heaps if self.n_heaps else float("nan")
+
+    def miss_counts(self) -> dict:
+        return cause_counts(self.causes)
+
+    def row(self) -> dict:
+        """The Table 2 row (``data/results/mavac_table2.csv`` columns)."""
+        return dict(machine=self.machine, trial=None, seed=self.seed, heaps=self.n_heaps, cleaned=self.n_cleaned,
+                    uncleaned=self.n_heaps - self.n_cleaned, cleaning_pct=round(self.cleaning_pct, 3),
+                    detected=self.detected, precision=round(self.precision, 4), recall=round(self.recall, 4),
+                    sim_time_s=round(self.times.sim_time_s, 3), wall_s=round(self.wall_s, 2))
+
+
+class _Run:
+    """State of a trial in progress (cell, heaps' events, vacuumed nodes, counters)."""
+
+    def __init__(self, cell, machine: Machine, params: OnlineParams, seed: int, result: TrialResult, camera):
+        self.cell, self.machine, self.params, self.seed, self.result = cell, machine, params, seed, result
+        self.events = HeapEvents.empty(result.n_heaps)
+        self.vacuumed = np.zeros((0, 3))
+        self.matched = np.zeros(result.n_heaps, dtype=bool)
+        self.n_plans = 0
+        d = params.detection
+        self.fov_y = float(np.degrees(2.0 * camera.theta_b))  # the FOV pyramid's height
+        self.K = intrinsics_from_fov(d.width, d.height, self.fov_y)
+
+    def _seed(self) -> int:
+        self.n_plans += 1
+        return (self.seed * 100_003 + self.n_plans) % (2**31 - 2)
+
+    def go_to(self, q_goal, what: str) -> bool:
+        """Plan and track an arm motion to ``q_goal``; False (with a warning) if unplannable."""
+        motion = plan_arm_motion(self.cell.robot, self.cell.checker, self.cell.q_cmd, q_goal, self.params.approach,
+                                 seed=self._seed())
+        self.result.times.planning_wall_s += motion.seconds
+        if not motion.solved:
+            self.result.warnings.append(f"{what}: RRT-Connect failed ({motion.reason})")
+            return False
+        self.result.times.arm_s += self.cell.track(motion.path[1:], self.params)
+        return True
+
+    def drive_to(self, spot) -> None:
+        """Fold the arm (or teleport it home if no path exists, with a warning), drive the base."""
+        cell = self.cell
+        if not self.go_to(cell.robot.q_home, "arm home before driving"):
+            cell.sim.reset_q(cell.robot.q_home)
+            cell.q_cmd = np.array(cell.robot.q_home, dtype=float)
+        start = cell.world_T_base[:2, 3]
+        length = base_path_length(start, spot[:2], self.machine.footprint, self.params.base_clearance)
+        self.result.times.base_s += length / self.params.base_speed
+        cell.move_base(se2_to_matrix(*spot))
+
+    def look(self):
+        """RGB-D image from the camera where the arm really is; marks frustum/image ground truth."""
+        d, cell = self.params.detection, self.cell
+        world_T_camera = cell.sim.world_T_link(cell.robot.camera_frame) @ mavac_T_opencv()
+        rgb, depth, seg = render_rgbd(cell.world.client, world_T_camera, width=d.width, height=d.height,
+                                      fov_y_deg=self.fov_y, near=NEAR, far=FAR)
+        present = np.flatnonzero(cell.dust.present)
+        self.events.mark("in_frustum", present[in_frustum(cell.dust.positions[present], world_T_camera, self.K,
+                                                          d.width, d.height, NEAR, FAR)])
+        self.events.mark("in_image", cell.dust.index_of_bodies(np.unique(seg)))
+        return rgb, depth, world_T_camera
+
+    def inspect_and_clean(self, q_guard) -> None:
+        """Algorithm 1, lines 3-16 at one guard."""
+        if not self.go_to(q_guard, "guard"):
+            return
+        self.result.guards += 1
+        rgb, depth, world_T_camera = self.look()
+        det = detect_dust(rgb, depth, self.K, world_T_camera, self.params.detection)
+        located = np.all(np.isfinite(det.nodes), axis=1)
+        heap_of = match_nodes(det.nodes, self.cell.dust.positions, self.params.detection.match_radius)
+        self.result.detected += int(located.sum())
+        self.result.true_positives += int(np.count_nonzero(heap_of[located] >= 0))
+        self.matched[heap_of[heap_of >= 0]] = True
+        shoulder = self.cell.sim.world_T_link(SHOULDER_LINK)[:3, 3]
+        why = filter_nodes(det.nodes, det.depth, shoulder=shoulder, vacuumed=self.vacuumed,
+                           params=self.params.detection)
+        for name in FILTERS:
+            self.result.filtered[name] += int(np.count_nonzero(why == name))
+        kept = np.flatnonzero(why == "")
+        world_T_guard_tool = self.cell.world_T_tool()
+        for area in areas_from_nodes(det.nodes[kept], eps=self.params.approach.cluster_eps,
+                                     min_samples=self.params.approach.cluster_min_samples):
+            self.clean_area(det.nodes[kept][area], heap_of[kept][area], world_T_guard_tool)
+
+    def clean_area(self, nodes, heaps, world_T_guard_tool) -> None:
+        """Approach (eq. 5), vacuum, return; records the heaps' fate."""
+        cell, p = self.cell, self.params
+        self.result.areas += 1
+        rng = np.random.default_rng([self.seed, self.n_plans])
+        approach = find_approach(cell.robot, cell.checker, cell.world_T_base, nodes, world_T_guard_tool, cell.q_cmd,
+                                 p.approach, rng=rng, seed=self._seed())
+        self.result.times.planning_wall_s += approach.planning_seconds
+        self.result.rrt_approach_seconds += [a[2] for a in approach.attempts if a[1] != "no approach found"]
+        if not approach.success:
+            self.events.mark("no_approach" if approach.reason == "no approach found" else "planner_failed", heaps)
+            return
+        self.result.times.arm_s += cell.track(approach.motion.path[1:], p)
+        order = np.r_[approach.node:len(nodes), 0:approach.node]  # start at the approached node
+        self.events.mark("attempted", heaps)
+        log = vacuum_area(cell, approach.world_T_approach, nodes[order], p.vacuum)
+        self.vacuumed = np.vstack([self.vacuumed, nodes])
+        self.result.times.vacuum_s += log.seconds
+        self.result.peak_forces += log.peak_forces
+        self.result.areas_cleaned += int(len(log.sucked) > 0)
+        cell.q_cmd = np.array(approach.q, dtype=float)
+
+
+#: link whose origin is the centre of the arm's reachable sphere (UR10 shoulder)
+SHOULDER_LINK = "shoulder_link"
+
+
+def _empty_result(name: str, seed: int, heaps, reason: str) -> TrialResult:
+    n = len(heaps)
+    causes = np.full(n, CAUSES[0], dtype="<U17")
+    return TrialResult(name, seed, np.asarray(heaps).reshape(-1, 3), np.zeros(n, dtype=bool), causes, reason=reason)
+
+
+def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None = None, seed: int = 0) -> TrialResult:
+    """One online cleaning trial (Algorithm 1) in pybullet.
+
+    Parameters
+    ----------
+    machine : Machine
+    plan : mavac.inspection.plan.InspectionPlan
+        Offline plan of ``machine`` (spots, guards, NoS guards in execution order).
+    robot : RobotModel, optional
+        The plan's robot (default :func:`mavac.robots.models.ur10_mobile`).
+    params : OnlineParams, optional
+    seed : int, >= 0
+        Heap layout, orientation samples, IK restarts and RRT-Connect seeds.
+
+    Returns
+    -------
+    TrialResult
+        No pybullet client stays connected, also when this raises.
+    """
+    t0 = time.perf_counter()
+    check_instance("machine", machine, Machine)
+    params = OnlineParams() if params is None else check_instance("params", params, OnlineParams)
+    seed = check_int("seed", seed, 0, 2**31 - 1)
+    heaps = heaps_for_trial(machine, params.dust, seed)
+    if not len(heaps):
+        return _empty_result(machine.name, seed, heaps, "no heaps: the machine has no upward-facing surface")
+    if len(plan.poses) == 0:
+        return _empty_result(machine.name, seed, heaps, "empty plan: no guard pose to inspect from")
+    robot = ur10_mobile() if robot is None else robot
+    result = _empty_result(machine.name, seed, heaps, "")
+    with SimWorld(time_step=params.time_step, seed=seed) as world:
+        cell = build_cell(world, machine, robot, heaps, params, se2_to_matrix(*plan.poses[0, :3]))
+        run = _Run(cell, machine, params, seed, result, plan.params.camera)
+        for i, pose in enumerate(plan.poses):
+            if i == 0 or plan.pose_spot[i] != plan.pose_spot[i - 1]:
+                run.drive_to(pose[:3])
+            run.inspect_and_clean(pose[3:])
+        result.cleaned = cell.dust.cleaned.copy()
+    result.recalled = int(np.count_nonzero(run.matched))
+    result.causes = miss_causes(run.events, result.cleaned)
+    if result.detected == 0:
+        result.reason = "no dust detected from any guard pose"
+    result.wall_s = time.perf_counter() - t0
+    return result
