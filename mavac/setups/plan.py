@@ -210,7 +210,8 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None) -> S
 
     t_s = params.planner.setup_time
     costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
-    res = solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method, setup_time=t_s)
+    res = solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method, setup_time=t_s,
+                            patch_time=area * passes / params.cleaning_rate)
     done = np.zeros(n, dtype=bool)
     patches, reachable = [], []
     for j in res.setups:
