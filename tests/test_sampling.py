@@ -213,3 +213,13 @@ def test_random_sampling_off_grid():
     res = S.random_sampling(reach, SPACE, samp, variant="C_XY", seed=1)
     assert res.samples <= 500
     assert res.covers_target == bool(res.cover.any(axis=0).all())
+
+
+def test_alpha_steps_wrap_onto_the_grid_start():
+    # 300 + 60 deg lands on 0 deg exactly (a float just under 360 deg would be a setup off the grid)
+    space = dataclasses.replace(SPACE, res_alpha=math.radians(60))
+    grid = S.uniform_setups(space)
+    keys = set(S.setup_keys(grid))
+    last = grid[np.isclose(grid[:, 2], math.radians(300))][0]
+    nb = S.neighbours(last, (2,), np.array([0.25, 0.25, math.radians(60)]), space)
+    assert all(k in keys for k in S.setup_keys(nb))

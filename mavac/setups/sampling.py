@@ -215,7 +215,9 @@ def score(p1: np.ndarray, p2: np.ndarray, scoring: str) -> np.ndarray:
 
 
 def _wrap_alpha(alpha: np.ndarray, space: SetupSpaceParams) -> np.ndarray:
-    return space.alpha_min + np.mod(alpha - space.alpha_min, 2.0 * math.pi)
+    turn = np.mod(alpha - space.alpha_min, 2.0 * math.pi)
+    # a float a hair under a full turn is the start again (300 + 60 deg is 0 deg, one setup)
+    return space.alpha_min + np.where(turn > 2.0 * math.pi - 1e-9, 0.0, turn)
 
 
 def neighbours(setup, axes, step, space: SetupSpaceParams) -> np.ndarray:
