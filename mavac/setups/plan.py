@@ -67,7 +67,8 @@ class SetupPlan:
         ``(cost - certificate_cost) / certificate_cost``; 0 means the plan is proven optimal
         over the candidates; None without a certificate.
     status : str
-        The planner's status ("optimal", "timed_out", "no_solution", "empty").
+        The planner's status ("optimal", "converged", "timed_out", "node_limited", "no_solution",
+        "empty"; see :class:`mavac.planning.setcover.SetupCoverResult`).
     uncoverable : (u,) int
         Patches no candidate setup reaches (not in the plan).
     seconds : float
