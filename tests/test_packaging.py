@@ -23,7 +23,7 @@ THROUGH_TRIMESH = {"embreex": r"\.ray\.", "manifold3d": r'engine="manifold"', "r
 #: test tools used by the command line of `make test`, not imported
 TOOLS = {"pytest-timeout": "\ntimeout = ", "nbval": "--nbval", "ipykernel": "ipykernel install", "nbconvert": "nbconvert", "nbformat": "nbval"}
 #: declared for code on other branches that is being merged; drop an entry once mavac imports it
-PENDING = {"pybullet": "simulation of MAVAC's online loop and Kabir's bimanual execution (mavac.sim)"}
+PENDING: dict = {}
 
 
 def _pins() -> dict:

@@ -33,6 +33,13 @@ TOOL_SPHERE_RADIUS = 0.025
 # Azure Kinect DK body 103 x 39 x 126 mm (Microsoft hardware specification), mounted on top
 # of the tube next to the flange.
 KINECT_SIZE = (0.039, 0.103, 0.126)  # along camera x (optical axis), y, z
+# Masses on the flange (dynamics only; kinematics and collision do not read them): Azure
+# Kinect DK 440 g (hardware specification); tube with its share of the hose 0.4 kg and
+# perforated sphere 0.1 kg (ours, the paper gives no tool mass). pybullet needs them: the bare
+# UR10 wrist (0.2 kg) is too light for a 240 Hz impedance loop to be stable.
+KINECT_MASS = 0.44
+TOOL_TUBE_MASS = 0.4
+TOOL_SPHERE_MASS = 0.1
 
 # Corke's standard DH Puma 560 (Robotics Toolbox for MATLAB, models/mdl_puma560.m;
 # kinematics from Corke & Armstrong-Helouvry, ICRA 1994; joint limits from Wang & Chen,
@@ -154,6 +161,17 @@ def _rebuild(builder: str, kwargs: dict, q_home: np.ndarray) -> RobotModel:
     return robot
 
 
+def _add_tool_inertia(model, joint: int, joint_T_flange: pin.SE3, joint_T_camera: pin.SE3) -> None:
+    """Tube (thin rod along the tool z), sphere and Kinect (box) as inertia on the wrist."""
+    L, r = TOOL_TUBE_LENGTH, TOOL_TUBE_RADIUS
+    rod = np.diag([TOOL_TUBE_MASS * (3 * r**2 + L**2) / 12] * 2 + [TOOL_TUBE_MASS * r**2 / 2])
+    model.appendBodyToJoint(joint, pin.Inertia(TOOL_TUBE_MASS, np.array([0.0, 0.0, L / 2]), rod), joint_T_flange)
+    sphere = pin.Inertia.FromSphere(TOOL_SPHERE_MASS, TOOL_SPHERE_RADIUS)
+    model.appendBodyToJoint(joint, pin.Inertia(TOOL_SPHERE_MASS, np.array([0.0, 0.0, L]), sphere.inertia),
+                            joint_T_flange)
+    model.appendBodyToJoint(joint, pin.Inertia.FromBox(KINECT_MASS, *KINECT_SIZE), joint_T_camera)
+
+
 def ur10_mobile() -> RobotModel:
     """UR10 (example-robot-data) on a MiR200-sized SE(2) base, with vacuum tool and camera.
 
@@ -210,6 +228,7 @@ def ur10_mobile() -> RobotModel:
     model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_camera, pin.FrameType.OP_FRAME))
     camera_body = _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_camera, (0.1, 0.1, 0.1, 1.0))
     _add_to_both(collision, visual, camera_body)
+    _add_tool_inertia(model, joint, joint_T_flange, joint_T_camera)
 
     # Elbow up, tool tip ~(1.0, 0, 0.8) m pointing forward and 60 deg down, wrist away from
     # q5 = 0 (wrist singularity); a high-maneuverability IK solution for that target.

@@ -7,6 +7,7 @@
   (``visible_from``) and HPR's error rates against ray casting (``hpr_error_rates``).
 * :mod:`mavac.vision.stain` -- stain images, K-means stain masks, C_p and the N_c-colour
   quantisation into passes (Kabir, Sec. VII).
+* :mod:`mavac.vision.rgbd` -- back-projection of RGB-D pixels to 3-D points (pinhole, OpenCV frame).
 * :mod:`mavac.vision.icp` -- registration of a part's CAD mesh to a point cloud (Kabir, Sec. VII).
 
 Camera frame (MAVAC): optical axis = camera x, ``theta_a`` half-angle in the camera XY plane
