@@ -262,7 +262,10 @@ class SetupSpaceParams:
     A setup (x, y, alpha) places the part frame (origin at the centre of the part's bounding-box
     bottom, z up) at ``base_T_part = Trans(origin_x + x, origin_y + y, table_z) Rz(alpha)`` in the
     robot base frame (the Puma's shoulder: z0 up through joint 1, the shoulder axis at z = 0).
-    The paper gives the range, not the placement (Kabir, Sec. IX-A); see ``origin_x`` below.
+    The paper gives the range, not the placement (Kabir, Sec. IX-A), and says how the range was
+    found: a coarse sweep over a wide range, eliminating the setups that reach no patch
+    (Sec. IV-A). :mod:`mavac.setups.space` does that per part; the reproduced tables use it.
+    The defaults below are a generic square for a part of about a metre.
     """
 
     # Kabir, Sec. IX-A: "The narrowed down sampling region ... was [0, 1 m] x [0, 1 m] x [0, 2 pi]".
@@ -272,24 +275,19 @@ class SetupSpaceParams:
     y_max: float = 1.0
     alpha_min: float = 0.0
     alpha_max: float = 2.0 * math.pi
-    # Kabir, Sec. IX-A1: "50 mm x 50 mm x 10 deg ... 16317 setup configurations" (21 x 21 x 37).
+    # Kabir, Sec. IX-A1: "50 mm x 50 mm x 10 deg" (the paper counts alpha = 0 and 360 deg both,
+    # 21 x 21 x 37 = 16,317; our grids keep one of them, 21 x 21 x 36).
     res_x: float = 0.05
     res_y: float = 0.05
     res_alpha: float = math.radians(10.0)
-    # Ours (the paper does not place the square): x runs away from the robot from 0.30 m in
-    # front of joint 1 and y is centred on the robot, so the part centre moves over
-    # [0.30, 1.30] x [-0.50, 0.50] m in the base frame. The Puma 560 reaches ~0.86 m from the
-    # shoulder (a2 + d4 = 0.864 m plus a3, d3 offsets): with the centre near the robot a part of
-    # up to ~1.2 m is reachable over most of its top, with the centre at the far corner only its
-    # near edge is, so every object needs several setups and the far part of the square none.
+    # Ours, a generic default kept from earlier versions: the square starts 0.30 m in front of
+    # joint 1 and is centred on the robot sideways. The reproduced tables do not use it: they
+    # place each part's box by the paper's procedure (mavac.setups.space).
     origin_x: float = 0.30
     origin_y: float = -0.50
-    # Ours: table top at the height of the shoulder axis, 0.672 m above the floor under the
-    # Puma's pedestal (a common workbench height). The objects (up to 0.53 m tall, Kabir Fig. 6)
-    # rise above the shoulder, so the elbow-up arm reaches over them and the far and downward-
-    # facing parts of a stain need other setups. Lower tables (tried: 0.12 m and 0.37 m above
-    # the floor) let one setup reach most of every stain, unlike the paper's Table II.
-    table_z: float = 0.0
+    # Ours: a work table 0.75 m high (a common table height; the paper gives none), with the
+    # Puma's shoulder axis 0.672 m above the floor: the table top is 0.078 m above the shoulder.
+    table_z: float = 0.75 - 0.672
 
     def __post_init__(self):
         check_fields(self)
@@ -317,6 +315,11 @@ class ReachParams:
     tool_length: float = 0.10
     # Kabir, Sec. IV: only IK is tested; arm-vs-part collision is an option (ours, off).
     check_collision: bool = False
+    # Physics: the part rests on the table (the part frame's z = 0), so the tool cannot come
+    # from below it. A patch whose tool, from the tip along the normal over the tool length
+    # (at least 10 mm), would pass below the table top is unreachable; with check_collision
+    # the table (a slab under the part) joins the collision model too.
+    support_plane: bool = True
     # Clearance used by the optional collision check, m (ours).
     collision_margin: float = 0.0
     # The collision check poses the tool this far above the patch along its normal, since at
@@ -341,12 +344,13 @@ class ReachParams:
 class SamplingParams:
     """Hierarchical / random sampling with gradient descent (Kabir, Sec. IV-A, IX-A2)."""
 
-    # Level 1 of hierarchical sampling. Kabir, Table III: level 1 costs n_rfc = 36 without
-    # gradient descent, and Table V: "36 candidate setups ... uniformly sampled"; ours: 36 =
-    # 3 x 3 x 4 = 500 mm x 500 mm x 120 deg with both ends of each range included.
-    coarse_res_x: float = 0.5
-    coarse_res_y: float = 0.5
-    coarse_res_alpha: float = math.radians(120.0)
+    # Level 1 of hierarchical sampling, points per axis. Kabir, Table III: level 1 costs
+    # n_rfc = 36 without gradient descent, and Table V: "36 candidate setups ... uniformly
+    # sampled": 36 = 3 x 3 x 4, x and y at both ends and the middle of their range, alpha at
+    # 0, 90, 180 and 270 deg (ours: four distinct angles; 0 and 360 deg are one pose).
+    coarse_points_x: int = 3
+    coarse_points_y: int = 3
+    coarse_points_alpha: int = 4
     # Ours: at most 6 levels (two halvings of every axis, 250 x 250 x 60 deg) before giving up.
     max_levels: int = 6
     # Gradient-descent step: the fine resolution of Kabir Sec. IX-A1 (50 mm, 50 mm, 10 deg),
@@ -364,8 +368,9 @@ class SamplingParams:
 
     def __post_init__(self):
         check_fields(self)
-        for name in ("coarse_res_x", "coarse_res_y", "coarse_res_alpha",
-                     "gd_step_x", "gd_step_y", "gd_step_alpha"):
+        for name in ("coarse_points_x", "coarse_points_y", "coarse_points_alpha"):
+            check_int(name, getattr(self, name), lo=1)
+        for name in ("gd_step_x", "gd_step_y", "gd_step_alpha"):
             check_positive(name, getattr(self, name))
         check_int("max_levels", self.max_levels, lo=1)
         check_int("max_random_samples", self.max_random_samples, lo=1)
@@ -458,9 +463,16 @@ class SetupPlannerParams:
     guiding: bool = True
     # Kabir, Sec. IX-A4: branch-pruning heuristic (future-cost bound), ON in the paper.
     pruning: bool = True
-    # Kabir, Sec. V-A: computational time bound T_max, s. The paper gives no value; None
-    # searches to convergence (Tables V-VI report runs to convergence).
-    t_max: float | None = None
+    # Kabir, Sec. V-A: computational time bound T_max, s, of the whole call. The paper gives
+    # no value. Ours: 60 s, so that no call hangs; None searches without a time bound.
+    t_max: float | None = 60.0
+    # Ours: node limit of the search, deterministic where T_max is not (Tables V-VI are bounded
+    # by it); None for none. 200,000 nodes are about ten seconds of search in Python.
+    max_nodes: int | None = 200_000
+    # Cost of a setup in a plan. "fixed" (eq. 1 as printed): c_j = t_s + t_e over every patch
+    # setup j reaches. "remaining" (Kabir, Sec. V-A, which recomputes cleaning rates on the
+    # remaining patches as the plan grows): t_s + t_e of the patches not cleaned yet.
+    cost_model: str = "fixed"
     # Kabir, Sec. V-B2: T_decay in step 5 of Algorithm 4, s; "we set T_decay = 0".
     t_decay: float = 0.0
     # Kabir, Sec. V-B2: T_decay "can be an exponential function of the number of nodes
@@ -476,8 +488,6 @@ class SetupPlannerParams:
     setup_time: float = 60.0
     # Seed of Algorithm 5's random draws (ours).
     seed: int = 0
-    # Ours: node budget of the search (None: unbounded); a deterministic cap, unlike T_max.
-    max_nodes: int | None = None
 
     def __post_init__(self):
         check_fields(self)
@@ -488,6 +498,10 @@ class SetupPlannerParams:
             raise ValueError(f"bound must be 'lb' (eq. 2) or 'b' (eq. 7), got {self.bound!r}")
         if self.t_max is not None:
             check_positive("t_max", self.t_max)
+        if self.max_nodes is not None:
+            check_int("max_nodes", self.max_nodes, 1)
+        if self.cost_model not in ("fixed", "remaining"):
+            raise ValueError(f"cost_model must be 'fixed' or 'remaining', got {self.cost_model!r}")
         check_nonnegative("t_decay", self.t_decay)
         check_nonnegative("t_decay_rate", self.t_decay_rate)
         if self.algorithm == 2 and self.t_decay > 0:
@@ -497,8 +511,6 @@ class SetupPlannerParams:
         check_range("iess_prob", self.iess_prob, 0.0, 1.0, lo_open=True, hi_open=True)
         check_nonnegative("setup_time", self.setup_time)
         check_int("seed", self.seed, 0)
-        if self.max_nodes is not None:
-            check_int("max_nodes", self.max_nodes, 1)
 
 
 # ---- MAVAC offline planning: reachability map, spots, guards, NoS (read by mavac/inspection) ----

@@ -218,6 +218,51 @@ def _files_after_killed_write() -> list:
         return sorted(p.name for p in Path(folder).iterdir())
 
 
+def _plate_facing_table_plan():
+    """Plan of a plate resting on the table with its stained faces pointing down into it."""
+    import warnings
+
+    from mavac.geometry.parts import part_from_mesh
+    from mavac.setups.plan import plan_setups
+
+    box = trimesh.creation.box(extents=[0.3, 0.2, 0.02])
+    box.apply_translation([0, 0, 0.01])
+    faces = np.flatnonzero(box.face_normals[:, 2] < -0.9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return plan_setups(part_from_mesh(box, faces, np.ones(len(faces), int), name="plate"))
+
+
+def _zero_setups_plan():
+    from mavac.planning.setcover import solve_setup_cover
+
+    return solve_setup_cover(np.zeros((0, 4), bool), np.ones(0), method="both")
+
+
+def _default_both_on_random_60x40():
+    """solve_setup_cover with every default on the instance that used to run for minutes."""
+    import warnings
+
+    from mavac.planning.setcover import solve_setup_cover
+
+    rng = np.random.default_rng(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return solve_setup_cover(rng.random((60, 40)) < 0.3, rng.uniform(1, 2, 60), method="both")
+
+
+def _setup_motion_scaled():
+    from mavac.geometry.parts import load_part
+    from mavac.robots.models import puma560
+    from mavac.setups.viewer import setup_motion
+
+    class Plan:
+        setups = np.zeros((1, 3))
+        patches = [np.arange(3)]
+
+    return setup_motion(puma560(0.1), load_part("schwefel"), Plan(), SCALED[None])
+
+
 # ---- the hand-written matrix ----
 
 
@@ -230,6 +275,11 @@ def _cases_wrong():
     image = lambda: _stain_image()[0]  # noqa: E731
     return [
         answer("wrong", "stain-float-image-same-mask", _float_image_same_mask, bool),
+        answer("wrong", "plan-stain-facing-down-into-the-table", _plate_facing_table_plan,
+               lambda plan: plan.status == "no_solution" and set(plan.uncoverable_causes) == {"below_support"}),
+        answer("wrong", "setcover-zero-setups-no-solution", _zero_setups_plan,
+               lambda res: res.status == "no_solution" and list(res.uncoverable) == [0, 1, 2, 3]),
+        refuse("wrong", "setup_motion-scaled-base_T_parts", _setup_motion_scaled, ValueError, "base_T_parts"),
         answer("wrong", "stain-float-image-same-passes", _float_image_same_passes, bool),
         refuse("wrong", "stain-uint16-image", lambda: stain.stain_mask_kmeans(image().astype(np.uint16) * 257),
                ValueError, r"image.*dtype uint16.*range.*shape"),
@@ -433,6 +483,8 @@ def _cases_hang():
     from mavac.vision.stain import face_index_image
 
     return [
+        answer("hang", "setcover-both-defaults-random-60x40", _default_both_on_random_60x40,
+               lambda res: res.seconds < 120 and res.status in ("optimal", "node_limited", "timed_out")),
         refuse("hang", "toolpath-scaled-x1000-world_T_part", lambda: _toolpath(1000 * np.eye(4)), ValueError,
                "world_T_part"),
         refuse("hang", "toolpath-tiny-waypoint-spacing", lambda: _toolpath(waypoint_spacing_m=1e-7), ValueError,

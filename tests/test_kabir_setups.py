@@ -1,12 +1,14 @@
-"""Notebook helpers of mavac.experiments.kabir_setups: Fig. 7 diagnosis and the reach-test setup."""
+"""Notebook helpers of mavac.experiments.kabir_setups: Fig. 7 diagnosis, the reach-test setup, the
+placed setup spaces and the determinism of notebook 08's planner tables."""
 
 import dataclasses
 import math
 
 import numpy as np
+import pandas as pd
 
 from mavac.experiments import kabir_setups as K
-from mavac.params import SamplingParams, SetupSpaceParams
+from mavac.params import ReachParams, SamplingParams, SetupPlanParams, SetupSpaceParams
 from mavac.setups.sampling import uniform_setups
 
 SPACE = SetupSpaceParams(res_x=0.5, res_y=0.5, res_alpha=math.radians(120))
@@ -20,17 +22,18 @@ def toy_baseline():
     cover = np.zeros((len(setups), 10), dtype=bool)
     for j, (x, _, _) in enumerate(setups):
         cover[j, {0.0: [0, 1], 0.5: [1, 2, 3, 4, 5], 1.0: list(range(1, 10))}[round(x, 1)]] = True
-    return K.Baseline("toy", setups, cover, np.ones(10), np.ones(10, dtype=int), 0)
+    return K.Baseline("toy", SPACE, setups, cover, np.ones(10), np.ones(10, dtype=int), 0)
 
 
 def test_absolute_round_walks_away_from_a_rare_patch_and_exhausts_the_grid():
     b = toy_baseline()
-    ca = K.exhaustion_diagnosis(b, SPACE, SAMPLING, variant="CA_XY", seed=0)
+    ca = K.exhaustion_diagnosis(b, SAMPLING, variant="CA_XY", seed=0)
     assert not ca["covers_target"] and ca["n_rfc"] == len(b.setups)  # every grid setup drawn
-    assert ca["missing_patches"] == 1 and ca["grid_setups_reaching_min"] == 12
-    assert ca["seeds_reaching_missing"] == 12
-    assert ca["kept_after_conservative"] == 12 and ca["kept_after_absolute"] == 0
-    c = K.exhaustion_diagnosis(b, SPACE, SAMPLING, variant="C_XY", seed=0)
+    # x = 0: 3 y values x 3 distinct alpha (0, 120, 240 deg)
+    assert ca["missing_patches"] == 1 and ca["grid_setups_reaching_min"] == 9
+    assert ca["seeds_reaching_missing"] == 9
+    assert ca["kept_after_conservative"] == 9 and ca["kept_after_absolute"] == 0
+    c = K.exhaustion_diagnosis(b, SAMPLING, variant="C_XY", seed=0)
     assert c["covers_target"] and c["missing_patches"] == 0 and c["kept_after_absolute"] is None
 
 
@@ -38,3 +41,32 @@ def test_contrast_setup_reaches_about_half_of_the_stain():
     b = toy_baseline()
     j = np.flatnonzero(np.all(b.setups == K.contrast_setup(b), axis=1))[0]
     assert b.cover[j].sum() == 5  # x = 0.5: half of the ten coverable patches
+
+
+def _fast_planner_tables():
+    """Notebook 08's Tables V and VI in fast mode (its settings, its calls)."""
+    res = K.GRID_RESOLUTION["fast"]
+    space = dataclasses.replace(SetupSpaceParams(), res_x=res[0], res_y=res[1], res_alpha=res[2])
+    sampling = dataclasses.replace(SamplingParams(), gd_step_x=res[0], gd_step_y=res[1], gd_step_alpha=res[2])
+    baselines, spaces = K.placed_baselines(K.PLANNER_OBJECTS, space, ReachParams(),
+                                           wide_resolution=K.WIDE_RESOLUTIONS["fast"], n_jobs=1)
+    instances = {name: K.planner_instance(baselines[name], ReachParams(), sampling) for name in K.PLANNER_OBJECTS}
+    rate, nodes = SetupPlanParams().cleaning_rate, K.PLANNER_MAX_NODES["fast"]
+    return (K.table5(instances, rate, nodes, setup_time=60.0),
+            K.table6(instances, rate, nodes, setup_times=(0, 60, 3000)).drop(columns="seconds"), spaces)
+
+
+def test_notebook08_planner_tables_are_the_same_twice_and_flag_their_rows():
+    t5a, t6a, spaces = _fast_planner_tables()
+    t5b, t6b, _ = _fast_planner_tables()
+    pd.testing.assert_frame_equal(t5a, t5b)
+    pd.testing.assert_frame_equal(t6a, t6b)
+    for t in (t5a, t6a):
+        assert {"timed_out", "node_limited", "finished"} <= set(t.columns)
+        assert not t.timed_out.any() and (t.finished == ~t.node_limited).all()
+        assert (t.nodes <= K.PLANNER_MAX_NODES["fast"]).all()
+    assert set(t6a.cost_model) == {"fixed", "remaining"}
+    # the placed boxes start on the table side of the robot and hold the setups that reach
+    assert (spaces.x_lo >= 0).all() and (spaces.wide_reaching > 0).all()
+    exact = t6a[(t6a.bound == "lb") & (t6a.algorithm == 2) & t6a.finished]
+    assert len(exact) and np.allclose(exact.gap, 0.0)

@@ -96,7 +96,7 @@ def test_random_and_uniform_sampling_paths_run():
         plan = plan_setups(part, robot=robot(), params=params)
         check_plan(plan, len(part.passes))
         if method == "uniform":
-            assert plan.n_rfc == 5 * 5 * 7
+            assert plan.n_rfc == 5 * 5 * 6  # alpha 0-300 deg: 360 deg is 0 deg again
 
 
 def test_bad_parameters_raise_value_errors():
@@ -150,13 +150,15 @@ def test_causes_classify_each_left_out_patch():
     from mavac.setups.diagnose import unreachable_causes
 
     tri = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0, 0.01, 0.0]])
-    space = SetupSpaceParams(origin_x=0.0, origin_y=0.0)
+    space = SetupSpaceParams(origin_x=0.0, origin_y=0.0, table_z=-0.5)  # table 0.5 m under the shoulder
     grid = np.zeros((1, 3))
-    # at the shoulder (inside the reach sphere, no IK), 3 m up, 3 m out, and one the arm reaches
-    v = np.stack([tri, tri + [0, 0, 3.0], tri + [3.0, 0, 0], tri + [0.3, 0.0, -0.5]])
-    n = np.array([[0, 0, 1.0]] * 4)
+    # at the shoulder (inside the reach sphere, no IK), 3 m up, 3 m out, one the arm reaches, and
+    # that one again facing down into the table
+    v = np.stack([tri + [0, 0, 0.5], tri + [0, 0, 3.5], tri + [3.0, 0, 0.5], tri + [0.3, 0.0, 0.0],
+                  tri + [0.3, 0.0, 0.0]])
+    n = np.array([[0, 0, 1.0]] * 4 + [[0, 0, -1.0]])
     causes = unreachable_causes(robot(), v, n, space, grid=grid)
-    assert causes.tolist() == ["facing_away", "too_high", "too_far", "missed_by_sampling"]
+    assert causes.tolist() == ["facing_away", "too_high", "too_far", "missed_by_sampling", "below_support"]
 
 
 def test_patches_larger_than_the_tool_tip_warn():

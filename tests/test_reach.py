@@ -177,5 +177,6 @@ def test_every_vertex_slot_decides_inside_the_reach_bound():
     for slot in range(3):
         only_this = inside & ~per_vertex[:, slot] & (per_vertex.sum(axis=1) == 2)
         assert only_this.sum() >= 5, f"the sample has too few patches lost at vertex slot {slot}"
-    cover = R.patch_reach(robot(), targets, setups, SPACE, params=PARAMS)
+    # the triangles cross the table top: only the IK decides here, not the support plane
+    cover = R.patch_reach(robot(), targets, setups, SPACE, params=ReachParams(support_plane=False))
     np.testing.assert_array_equal(cover[0], per_vertex.all(axis=1))

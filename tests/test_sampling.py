@@ -33,23 +33,42 @@ SAMP = SamplingParams()
 COARSE_SAMP = dataclasses.replace(SAMP, gd_step_x=0.1, gd_step_y=0.1, gd_step_alpha=math.radians(30))
 
 
-def test_paper_grid_has_16317_setups():
+def test_paper_grid_holds_each_pose_once():
+    # the paper's 16,317 = 21 x 21 x 37 counts alpha = 0 and alpha = 360 deg both: one pose
     xs, ys, alphas = S.grid_axes(SPACE)
-    assert (len(xs), len(ys), len(alphas)) == (21, 21, 37)
+    assert (len(xs), len(ys), len(alphas)) == (21, 21, 36)
     grid = S.uniform_setups(SPACE)
-    assert grid.shape == (16317, 3)
+    assert grid.shape == (15876, 3)
     assert grid[:, 0].min() == 0.0 and math.isclose(grid[:, 0].max(), 1.0)
-    assert math.isclose(grid[:, 2].max(), 2 * math.pi)
+    assert math.isclose(grid[:, 2].max(), 2 * math.pi - math.radians(10))
     assert len(set(S.setup_keys(grid))) == len(grid)
 
 
-def test_level_one_has_36_setups_and_levels_halve_one_axis_at_a_time():
-    coarse = np.array([SAMP.coarse_res_x, SAMP.coarse_res_y, SAMP.coarse_res_alpha])
-    assert len(S.uniform_setups(SPACE, S.hierarchy_resolution(coarse, 1))) == 36
+def _distinct_poses(grid):
+    """Setups as poses: alpha modulo 2 pi, rounded."""
+    a = np.mod(grid[:, 2], 2 * math.pi)
+    a[np.isclose(a, 2 * math.pi)] = 0.0
+    return {tuple(np.round([x, y, t], 9)) for x, y, t in zip(grid[:, 0], grid[:, 1], a)}
+
+
+@pytest.mark.parametrize("res_alpha_deg", [10, 30, 90, 120])
+def test_no_grid_has_duplicate_setups(res_alpha_deg):
+    grid = S.uniform_setups(SPACE, (0.25, 0.5, math.radians(res_alpha_deg)))
+    assert len(_distinct_poses(grid)) == len(grid)
+
+
+def test_level_one_is_3_by_3_by_4_distinct_setups_and_levels_halve_one_axis_at_a_time():
+    coarse = S.coarse_resolution(SPACE, SAMP)
+    level1 = S.uniform_setups(SPACE, S.hierarchy_resolution(coarse, 1))
+    assert len(level1) == 36 and len(_distinct_poses(level1)) == 36
+    np.testing.assert_allclose(np.unique(level1[:, 2]), np.radians([0, 90, 180, 270]))
+    np.testing.assert_allclose(np.unique(level1[:, 0]), [0.0, 0.5, 1.0])
     np.testing.assert_allclose(S.hierarchy_resolution(coarse, 2), coarse * [0.5, 1, 1])
     np.testing.assert_allclose(S.hierarchy_resolution(coarse, 3), coarse * [0.5, 0.5, 1])
     np.testing.assert_allclose(S.hierarchy_resolution(coarse, 4), coarse * 0.5)
     np.testing.assert_allclose(S.hierarchy_resolution(coarse, 5), coarse * [0.25, 0.5, 0.5])
+    wide = dataclasses.replace(SPACE, x_max=2.6, y_max=1.3)  # the box's own size sets the step
+    np.testing.assert_allclose(S.coarse_resolution(wide, SAMP)[:2], [1.3, 0.65])
 
 
 def test_bad_inputs_raise_value_errors_naming_the_parameter():
@@ -59,8 +78,8 @@ def test_bad_inputs_raise_value_errors_naming_the_parameter():
         SetupSpaceParams(res_alpha=-1.0)
     with pytest.raises(ValueError, match="res_y"):
         S.uniform_setups(SPACE, (0.05, 0.0, 0.1))
-    with pytest.raises(ValueError, match="coarse_res_x"):
-        SamplingParams(coarse_res_x=0.0)
+    with pytest.raises(ValueError, match="coarse_points_x"):
+        SamplingParams(coarse_points_x=0)
     with pytest.raises(ValueError, match="gd_step_alpha"):
         SamplingParams(gd_step_alpha=-0.1)
     with pytest.raises(ValueError, match="repetitions"):
@@ -167,8 +186,7 @@ def test_hierarchical_sampling_covers_target_and_is_deterministic(variant):
     assert a.n_rfc == b.n_rfc and a.level == b.level
     if variant == "none":
         assert a.n_rfc == a.samples
-        level1 = len(S.uniform_setups(SPACE, S.hierarchy_resolution(
-            [SAMP.coarse_res_x, SAMP.coarse_res_y, SAMP.coarse_res_alpha], 1)))
+        level1 = len(S.uniform_setups(SPACE, S.hierarchy_resolution(S.coarse_resolution(SPACE, SAMP), 1)))
         assert a.level > 1 or a.n_rfc == level1
 
 
@@ -195,3 +213,13 @@ def test_random_sampling_off_grid():
     res = S.random_sampling(reach, SPACE, samp, variant="C_XY", seed=1)
     assert res.samples <= 500
     assert res.covers_target == bool(res.cover.any(axis=0).all())
+
+
+def test_alpha_steps_wrap_onto_the_grid_start():
+    # 300 + 60 deg lands on 0 deg exactly (a float just under 360 deg would be a setup off the grid)
+    space = dataclasses.replace(SPACE, res_alpha=math.radians(60))
+    grid = S.uniform_setups(space)
+    keys = set(S.setup_keys(grid))
+    last = grid[np.isclose(grid[:, 2], math.radians(300))][0]
+    nb = S.neighbours(last, (2,), np.array([0.25, 0.25, math.radians(60)]), space)
+    assert all(k in keys for k in S.setup_keys(nb))

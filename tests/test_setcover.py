@@ -10,19 +10,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mavac.params import SetupPlannerParams
+from mavac.planning import setcover
 from mavac.planning.iess import n_repeat_recommended
 from mavac.planning.setcover import (
+    MilpResult,
     brute_force_setup_cover,
     cleaning_rate,
     dfbnb_setup_cover,
     execution_order,
     execution_time_area_passes,
+    milp_remaining_cover,
     milp_setup_cover,
     setup_costs_from_times,
     solve_setup_cover,
 )
 
-P = SetupPlannerParams()
+P = SetupPlannerParams(t_max=None, max_nodes=None)  # no bound: the property tests compare optima
 
 
 @st.composite
@@ -202,7 +205,16 @@ def test_uncoverable_patches_are_listed(method):
     assert sorted(res.setups.tolist()) == [0, 1] and res.cost == pytest.approx(2.0)
     all_out = solve_setup_cover(np.zeros((2, 3), bool), np.ones(2), method=method)
     np.testing.assert_array_equal(all_out.uncoverable, [0, 1, 2])
-    assert all_out.setups.size == 0 and all_out.status == "empty"
+    # patches remain and nothing reaches them: no plan, no cost, not "empty"
+    assert all_out.setups.size == 0 and all_out.status == "no_solution" and all_out.cost == math.inf
+    assert all_out.certificate_cost is None
+
+
+@pytest.mark.parametrize("method", ["milp", "dfbnb", "both"])
+def test_zero_setups_is_no_solution_listing_every_patch(method):
+    res = solve_setup_cover(np.zeros((0, 3), bool), np.ones(0), method=method)
+    assert res.status == "no_solution" and res.cost == math.inf
+    np.testing.assert_array_equal(res.uncoverable, [0, 1, 2])
 
 
 @settings(max_examples=30, deadline=None)
@@ -210,6 +222,9 @@ def test_uncoverable_patches_are_listed(method):
 def test_solve_both_certifies_dfbnb(inst):
     cover, costs, area = inst
     res = solve_setup_cover(cover, costs, patch_area=area, params=P, method="both", setup_time=0.25)
+    if cover.shape[1] and not cover.any():
+        assert res.status == "no_solution"
+        return
     assert res.status in ("optimal", "empty")
     assert res.certificate_gap == pytest.approx(0.0, abs=1e-9)
     assert is_cover(cover, res.setups)
@@ -312,3 +327,125 @@ def test_heuristic_configurations_report_converged():
         assert res.status == "converged" and res.certificate_gap >= -1e-12
     exact = solve_setup_cover(cover, costs, params=P, method="dfbnb")
     assert exact.status == "optimal" and exact.node_expansions > 0
+
+
+# ---- issue 12 (Table V/VI) and issue 14 (reliability) -----------------------------------------
+
+
+def test_node_limit_stops_deterministically_and_says_so():
+    cover, costs = hard_instance()
+    params = dataclasses.replace(P, pruning=False, max_nodes=5000)
+    a = dfbnb_setup_cover(cover, costs, params=params)
+    b = dfbnb_setup_cover(cover, costs, params=params)
+    assert a.node_limited and not a.timed_out and not a.finished
+    assert a.node_expansions == b.node_expansions == 5000
+    assert a.cost == b.cost and a.setups.tolist() == b.setups.tolist()
+    res = solve_setup_cover(cover, costs, params=params, method="dfbnb")
+    assert res.status == "node_limited" and res.node_limited and not res.timed_out
+    done = dfbnb_setup_cover(cover[:4, :10], costs[:4], params=P)
+    assert done.finished
+
+
+def test_defaults_are_bounded():
+    d = SetupPlannerParams()
+    assert d.t_max is not None and d.t_max > 0 and d.max_nodes is not None
+
+
+def test_large_instance_warns_and_recommends_the_milp():
+    rng = np.random.default_rng(3)
+    cover = rng.random((60, 40)) < 0.3
+    params = dataclasses.replace(SetupPlannerParams(), max_nodes=2000)
+    with pytest.warns(UserWarning, match="milp"):
+        res = solve_setup_cover(cover, rng.uniform(1, 2, 60), params=params, method="both")
+    assert res.node_expansions <= 2000 and any("milp" in w for w in res.warnings)
+
+
+def _paper_algorithm2_nodes(cover, costs):
+    """Algorithm 2 transcribed literally (no pruning, no guiding): node count of its tree."""
+    m = cover.shape[0]
+    count = 0
+
+    def add_setup(p_r, s_u):
+        nonlocal count
+        count += 1
+        if not p_r:
+            return
+        single = [i for i in sorted(p_r) if sum(cover[j, i] for j in s_u) == 1]
+        if single:
+            s = next(j for j in s_u if cover[j, single[0]])
+            add_setup(p_r - set(np.flatnonzero(cover[s])), [j for j in s_u if j != s])
+            return
+        for s in s_u:  # "For every s in S_u", including setups that reach nothing of P_r
+            add_setup(p_r - set(np.flatnonzero(cover[s])), [j for j in s_u if j != s])
+
+    add_setup(set(np.flatnonzero(cover.any(axis=0))), list(range(m)))
+    return count
+
+
+@settings(max_examples=30, deadline=None)
+@given(instances(max_m=6, max_n=8))
+def test_branching_follows_algorithm2_every_unused_setup(inst):
+    cover, costs, _ = inst
+    res = dfbnb_setup_cover(cover, costs, params=dataclasses.replace(P, pruning=False, guiding=False))
+    assert res.node_expansions == _paper_algorithm2_nodes(cover, costs)
+
+
+def _remaining_brute_force(cover, ts, times):
+    best = math.inf
+    target = cover.any(axis=0)
+    for mask in range(1, 1 << cover.shape[0]):
+        chosen = [j for j in range(cover.shape[0]) if mask >> j & 1]
+        if np.array_equal(cover[chosen].any(axis=0), target):
+            best = min(best, ts * len(chosen) + times[target].sum())
+    return best if target.any() else 0.0
+
+
+@settings(max_examples=40, deadline=None)
+@given(instances(max_m=7, max_n=12), st.sampled_from([0.0, 0.3, 5.0]))
+def test_remaining_cost_model_dfbnb_equals_milp_and_brute_force(inst, ts):
+    cover, _, area = inst
+    times = area * 2.0
+    costs = setup_costs_from_times(cover.astype(float) @ times, ts) + 1e-9
+    params = dataclasses.replace(P, cost_model="remaining")
+    d = dfbnb_setup_cover(cover, costs, patch_area=area, params=params, setup_time=ts, patch_time=times)
+    m = milp_remaining_cover(cover, ts, times)
+    bf = _remaining_brute_force(cover, ts, times)
+    assert d.finished and m.optimal
+    assert d.cost == pytest.approx(bf, abs=1e-9) and m.cost == pytest.approx(bf, abs=1e-9)
+    res = solve_setup_cover(cover, costs, patch_area=area, params=params, method="both", setup_time=ts,
+                            patch_time=times)
+    if cover.any():
+        assert res.step_costs.sum() == pytest.approx(res.cost) and res.certificate_gap == pytest.approx(0.0, abs=1e-9)
+
+
+def test_remaining_cost_model_needs_times():
+    with pytest.raises(ValueError, match="patch_time"):
+        dfbnb_setup_cover(np.eye(3, dtype=bool), np.ones(3), params=dataclasses.replace(P, cost_model="remaining"))
+    with pytest.raises(ValueError, match="cost_model"):
+        SetupPlannerParams(cost_model="order")
+
+
+def test_unproven_milp_is_no_certificate(monkeypatch):
+    """HiGHS stopped at its limit with 62 where the plan costs 60: status and bound, no certificate."""
+    cover, costs = hard_instance()
+    fake = MilpResult(np.array([0, 1, 2]), 62.0, "time_limit", False, 0.01, np.zeros(0, np.int64), 55.0)
+    monkeypatch.setattr(setcover, "milp_setup_cover", lambda *a, **k: fake)
+    res = solve_setup_cover(cover, costs, params=dataclasses.replace(P, max_nodes=3000), method="both")
+    assert res.certificate_cost is None and res.certificate_gap is None
+    assert res.certificate_status == "time_limit" and res.certificate_bound == 55.0
+
+
+def test_seconds_and_t_max_cover_the_whole_call(monkeypatch):
+    cover, costs = hard_instance()
+    real = setcover.milp_setup_cover
+
+    def slow_milp(*args, **kwargs):
+        time.sleep(0.4)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(setcover, "milp_setup_cover", slow_milp)
+    t0 = time.perf_counter()
+    res = solve_setup_cover(cover, costs, params=dataclasses.replace(P, pruning=False, t_max=0.6), method="both")
+    wall = time.perf_counter() - t0
+    assert res.seconds >= 0.4 and res.seconds >= wall - 0.1  # the whole call, the MILP's time in it
+    assert res.timed_out and wall <= 0.6 + 0.25  # the search got only what the MILP left

@@ -158,18 +158,23 @@ def iess_probabilities(covers: np.ndarray, n_repeat: int) -> np.ndarray:
     return np.diff(at_most, prepend=0.0)
 
 
-def level1_instance(name: str, *, space: SetupSpaceParams | None = None, reach_params: ReachParams | None = None,
-                    sampling: SamplingParams | None = None, seed: int = 0) -> K.PlannerInstance:
+def level1_instance(name: str, *, fine: SetupSpaceParams | None = None, wide_resolution=K.WIDE_RESOLUTIONS["paper"],
+                    reach_params: ReachParams | None = None, sampling: SamplingParams | None = None,
+                    seed: int = 0) -> K.PlannerInstance:
     """Kabir's Tables V-VI instance of one object: level-1 grid, no descent, dominated removed.
 
-    The 36 level-1 setups do not depend on the fine grid, so they are answered by the reach test
-    directly (no uniform baseline sweep is needed).
+    The setup space is placed per object by the paper's procedure (:func:`K.placed_space`, as in
+    notebooks 06-08; cached on disk). The 36 level-1 setups do not depend on the fine grid, so they
+    are answered by the reach test directly (no uniform baseline sweep is needed).
     """
-    space = SetupSpaceParams() if space is None else space
+    reach_params = reach_params or ReachParams()
+    space, _ = K.placed_space(name, fine or SetupSpaceParams(), reach_params, wide_resolution=wide_resolution,
+                              seed=seed)
     part = load_part(name, seed=seed)
     n = len(part.patch_areas)
-    live = K.Baseline(name, np.zeros((0, 3)), np.zeros((0, n), dtype=bool), part.patch_areas, part.passes, seed)
-    return K.planner_instance(live, space, reach_params or ReachParams(), sampling or SamplingParams())
+    live = K.Baseline(name, space, np.zeros((0, 3)), np.zeros((0, n), dtype=bool), part.patch_areas, part.passes,
+                      seed)
+    return K.planner_instance(live, reach_params, sampling or SamplingParams())
 
 
 def iess_instance(inst: K.PlannerInstance, *, setup_time: float, cleaning_rate: float) -> IessInstance:

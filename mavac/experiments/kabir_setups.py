@@ -1,7 +1,10 @@
 """Notebooks 06-08: Kabir et al. (2017) Tables II-VI and Figs. 6-9 on our re-created objects.
 
 Every function returns a pandas DataFrame (or arrays for a figure) so the notebooks stay thin.
-The uniform baseline sweep (Table II) is cached on disk; the sampling experiments (Tables III,
+Each object's setup space is placed by the paper's narrowing procedure (a wide coarse sweep,
+setups reaching no patch dropped, the bounding box of the rest: :mod:`mavac.setups.space`) and
+carried by its :class:`Baseline`. The uniform baseline sweep (Table II) is cached on disk; the
+sampling experiments (Tables III,
 IV, Figs. 7-8) answer grid setups from the baseline's cover matrix (:func:`lookup_reach`, the
 exact reach results) and compute off-grid setups with the reach test, counting n_rfc either
 way; the planner experiments (Tables V, VI) run the DFBnB of :mod:`mavac.planning.setcover`
@@ -27,12 +30,13 @@ from ..io import atomic_path
 from ..parallel import map_trials
 from ..params import ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
 from ..planning.iess import n_repeat_for, p_find_min_cover
-from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_setup_cover,
-                                 setup_costs_from_times)
+from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_remaining_cover,
+                                 milp_setup_cover, setup_costs_from_times)
 from ..robots.models import puma560
 from ..setups.dominance import nondominated, pack_rows
 from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
                             reach_targets_from_part)
+from ..setups.space import WIDE_RESOLUTION, box_summary, reaching_box, wide_setup_space
 from ..setups.sampling import (VARIANTS, gradient_descent, hierarchical_sampling, random_sampling,
                                uniform_setups, variant_plan)
 from ..viz.plots import discrete_colorbar, new_figure, plot_mesh
@@ -43,17 +47,26 @@ OBJECTS = ("sine", "schwefel", "concave_bowl", "hyperboloid")
 PLANNER_OBJECTS = ("hyperboloid", "sine", "concave_bowl")
 ROBOT = "puma560"
 
+#: Notebooks 06-08 in fast mode and at paper scale: the fine grid (Kabir Sec. IX-A1: 50 mm x
+#: 50 mm x 10 deg; fast: 250 mm x 250 mm x 60 deg), the wide sweep that places the setup space
+#: (fast: 0.4 m x 0.4 m x 90 deg) and the node limit of every planner row (Tables V-VI; ours).
+GRID_RESOLUTION = {"fast": (0.25, 0.25, math.radians(60.0)), "paper": (0.05, 0.05, math.radians(10.0))}
+WIDE_RESOLUTIONS = {"fast": (0.4, 0.4, math.radians(90.0)), "paper": WIDE_RESOLUTION}
+PLANNER_MAX_NODES = {"fast": 20_000, "paper": 2_000_000}
+
 
 # ---------------------------------------------------------------- baseline (Table II)
 
 
 @dataclass
 class Baseline:
-    """Uniform-grid reach sweep of one object.
+    """Uniform-grid reach sweep of one object over its setup space.
 
     Attributes
     ----------
     name : str
+    space : SetupSpaceParams
+        The object's setup space (placed by :func:`placed_space` or given).
     setups : (m, 3) float
     cover : (m, n) bool
     area : (n,) float, m^2
@@ -63,6 +76,7 @@ class Baseline:
     """
 
     name: str
+    space: SetupSpaceParams
     setups: np.ndarray
     cover: np.ndarray
     area: np.ndarray
@@ -74,22 +88,77 @@ class Baseline:
         """(n,) bool: patches some grid setup reaches."""
         return self.cover.any(axis=0)
 
-    def reach(self, space: SetupSpaceParams, reach_params: ReachParams):
+    def reach(self, reach_params: ReachParams):
         """Exact reach function: grid setups from the sweep, others by the reach test."""
         part = load_part(self.name, seed=self.seed)
-        live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), space, params=reach_params)
+        live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), self.space,
+                         params=reach_params)
         return lookup_reach(self.setups, self.cover, fallback=live)
+
+
+def _sweep(part, space: SetupSpaceParams, reach_params: ReachParams, n_jobs):
+    targets = reach_targets_from_part(part)
+    setups = uniform_setups(space)
+    cover = cached_reach_sweep(ROBOT, targets.positions, targets.axes, targets.patch_targets, setups,
+                               space, reach_params, n_jobs=n_jobs)
+    return setups, np.asarray(cover, dtype=bool)
+
+
+def placed_space(name: str, fine: SetupSpaceParams, reach_params: ReachParams, *,
+                 wide_resolution=WIDE_RESOLUTION, n_jobs: int | None = None, seed: int = 0):
+    """The object's setup space by the paper's procedure (Sec. IV-A): sweep a wide region at a
+    coarse resolution, drop the setups that reach no patch, box the rest (cached on disk).
+
+    Parameters
+    ----------
+    fine : SetupSpaceParams
+        Resolution, alpha range and table height of the result.
+    wide_resolution : (3,) float
+        Coarse ``(m, m, rad)`` of the wide sweep.
+
+    Returns
+    -------
+    space : SetupSpaceParams
+    info : dict
+        ``object``, the wide region and its sweep (``wide_x_hi, wide_y_lo, wide_y_hi,
+        wide_setups, wide_reaching``) and :func:`mavac.setups.space.box_summary` of the box.
+    """
+    part = load_part(name, seed=seed)
+    robot = puma560(reach_params.tool_length)
+    wide = wide_setup_space(robot, part.patch_vertices, base=fine, resolution=wide_resolution)
+    setups, cover = _sweep(part, wide, reach_params, n_jobs)
+    space = reaching_box(setups, cover, wide, fine=fine)
+    info = dict(object=name, wide_x_hi=wide.origin_x + wide.x_max, wide_y_lo=wide.origin_y,
+                wide_y_hi=wide.origin_y + wide.y_max, wide_setups=len(setups),
+                wide_reaching=int(cover.any(axis=1).sum()), **box_summary(space))
+    return space, info
 
 
 def baseline(name: str, space: SetupSpaceParams, reach_params: ReachParams, n_jobs: int | None = None,
              seed: int = 0) -> Baseline:
     """Reach sweep of ``name`` over the uniform grid of ``space`` (cached on disk)."""
     part = load_part(name, seed=seed)
-    targets = reach_targets_from_part(part)
-    setups = uniform_setups(space)
-    cover = cached_reach_sweep(ROBOT, targets.positions, targets.axes, targets.patch_targets, setups,
-                               space, reach_params, n_jobs=n_jobs)
-    return Baseline(name, setups, np.asarray(cover, dtype=bool), part.patch_areas, part.passes, seed)
+    setups, cover = _sweep(part, space, reach_params, n_jobs)
+    return Baseline(name, space, setups, cover, part.patch_areas, part.passes, seed)
+
+
+def placed_baselines(names, fine: SetupSpaceParams, reach_params: ReachParams, *,
+                     wide_resolution=WIDE_RESOLUTION, n_jobs: int | None = None, seed: int = 0):
+    """:func:`baseline` of every object over its :func:`placed_space`.
+
+    Returns
+    -------
+    baselines : dict name -> Baseline
+    spaces : DataFrame
+        One row per object, :func:`placed_space`'s ``info``.
+    """
+    baselines, rows = {}, []
+    for name in names:
+        space, info = placed_space(name, fine, reach_params, wide_resolution=wide_resolution, n_jobs=n_jobs,
+                                   seed=seed)
+        baselines[name] = baseline(name, space, reach_params, n_jobs=n_jobs, seed=seed)
+        rows.append(info)
+    return baselines, pd.DataFrame(rows)
 
 
 def min_cover_size(cover) -> int:
@@ -185,20 +254,19 @@ class _HierarchicalTask:
     baseline: Baseline
     variant: str
     optimum: int
-    space: SetupSpaceParams
     reach_params: ReachParams
     sampling: SamplingParams
 
     def __call__(self, _=None) -> dict:
         b = self.baseline
-        res = hierarchical_sampling(CountingReach(b.reach(self.space, self.reach_params)), self.space,
+        res = hierarchical_sampling(CountingReach(b.reach(self.reach_params)), b.space,
                                     self.sampling, variant=self.variant, target=b.coverable)
         return dict(object=b.name, variant=self.variant, setups=min_cover_size(res.nondominated_cover),
                     level=res.level, n_rfc=res.n_rfc, optimal_setups=self.optimum,
                     covers_target=res.covers_target)
 
 
-def table3(baselines: dict, space: SetupSpaceParams, reach_params: ReachParams, sampling: SamplingParams,
+def table3(baselines: dict, reach_params: ReachParams, sampling: SamplingParams,
            variants=VARIANTS, n_jobs: int | None = None) -> pd.DataFrame:
     """Kabir Table III: hierarchical uniform sampling with each gradient-descent variant.
 
@@ -208,7 +276,7 @@ def table3(baselines: dict, space: SetupSpaceParams, reach_params: ReachParams, 
     tasks = []
     for name, b in baselines.items():
         best = min_cover_size(b.cover[nondominated(b.cover)])
-        tasks += [_HierarchicalTask(b, v, best, space, reach_params, sampling) for v in variants]
+        tasks += [_HierarchicalTask(b, v, best, reach_params, sampling) for v in variants]
     return pd.DataFrame(map_trials(_run, tasks, n_jobs=n_jobs, desc="hierarchical sampling"))
 
 
@@ -245,7 +313,7 @@ def _run(task):
     return task()
 
 
-def random_runs(baselines: dict, space: SetupSpaceParams, sampling: SamplingParams, *, variants=VARIANTS,
+def random_runs(baselines: dict, sampling: SamplingParams, *, variants=VARIANTS,
                 repetitions: int | None = None, n_jobs: int | None = None, chunk: int = 25) -> pd.DataFrame:
     """Kabir IX-A2: ``repetitions`` random-sampling runs per object and variant (seeds 0..r-1).
 
@@ -265,13 +333,12 @@ def random_runs(baselines: dict, space: SetupSpaceParams, sampling: SamplingPara
         for variant in variants:
             for a in range(0, reps, chunk):
                 seeds = tuple(range(a, min(reps, a + chunk)))
-                tasks.append(_RandomTask(name, variant, seeds, b.setups, b.cover, best, space, sampling))
+                tasks.append(_RandomTask(name, variant, seeds, b.setups, b.cover, best, b.space, sampling))
     rows = map_trials(_run, tasks, n_jobs=n_jobs, desc="random sampling")
     return pd.DataFrame([r for chunk in rows for r in chunk])
 
 
-def exhaustion_diagnosis(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams,
-                         variant: str = "CA_XY", seed: int = 0) -> dict:
+def exhaustion_diagnosis(b: Baseline, sampling: SamplingParams, variant: str = "CA_XY", seed: int = 0) -> dict:
     """Why a random-sampling run exhausts the grid (Fig. 7): the patches it never covers, how
     many grid setups reach each, and whether the seeds that reach them still do after the
     conservative round and after the absolute round of the descent.
@@ -285,14 +352,14 @@ def exhaustion_diagnosis(b: Baseline, space: SetupSpaceParams, sampling: Samplin
     """
     target = b.cover.any(axis=0)
     reach = CountingReach(lookup_reach(b.setups, b.cover))
-    run = random_sampling(reach, space, sampling, variant=variant, seed=seed, target=target)
+    run = random_sampling(reach, b.space, sampling, variant=variant, seed=seed, target=target)
     missing = np.flatnonzero(target & ~run.cover.any(axis=0))
     counts = b.cover[:, missing].sum(axis=0)
     seeds = np.flatnonzero(b.cover[:, missing].any(axis=1)) if len(missing) else np.zeros(0, dtype=np.int64)
     kept = {"conservative": 0, "absolute": 0}
     rounds, _ = variant_plan(variant)
     for j in seeds:
-        g = gradient_descent(reach, b.setups[j], variant, space, sampling, seed_cover=b.cover[j])
+        g = gradient_descent(reach, b.setups[j], variant, b.space, sampling, seed_cover=b.cover[j])
         had = b.cover[j, missing]
         for name, end in zip(rounds, g.round_ends):
             covered = reach(end[None])[0]
@@ -311,7 +378,7 @@ def table4(runs: pd.DataFrame) -> pd.DataFrame:
     return out.rename(columns={"optimal": "p_optimal"})
 
 
-def landscape(b: Baseline, space: SetupSpaceParams, alpha: float):
+def landscape(b: Baseline, alpha: float):
     """Patches covered on the x-y grid at the grid alpha nearest ``alpha`` (Kabir Fig. 8).
 
     Returns
@@ -326,7 +393,7 @@ def landscape(b: Baseline, space: SetupSpaceParams, alpha: float):
     return xs, ys, counts, a
 
 
-def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alpha: float, *, n_paths: int = 8,
+def gd_paths(b: Baseline, sampling: SamplingParams, alpha: float, *, n_paths: int = 8,
              seed: int = 0, variant: str = "CA_XY") -> pd.DataFrame:
     """Gradient-descent paths from random x-y seeds at a fixed grid alpha (Kabir Fig. 8).
 
@@ -334,13 +401,13 @@ def gd_paths(b: Baseline, space: SetupSpaceParams, sampling: SamplingParams, alp
     two ``*_end`` flag the setups where the conservative and the absolute round ended).
     """
     reach = CountingReach(lookup_reach(b.setups, b.cover))
-    _, _, _, a = landscape(b, space, alpha)
+    _, _, _, a = landscape(b, alpha)
     grid = b.setups[np.isclose(b.setups[:, 2], a)]
     rng = np.random.default_rng(seed)
     rows = []
     rounds, _ = variant_plan(variant)
     for k, j in enumerate(rng.choice(len(grid), n_paths, replace=False)):
-        g = gradient_descent(reach, grid[j], variant, space, sampling)
+        g = gradient_descent(reach, grid[j], variant, b.space, sampling)
         ends = dict(zip(rounds, g.round_end_steps.tolist()))
         for step, (s, c) in enumerate(zip(g.path, g.path_scores)):
             rows.append(dict(path=k, step=step, x=s[0], y=s[1], alpha=s[2], covered=int(c),
@@ -363,61 +430,77 @@ class PlannerInstance:
     passes: np.ndarray
 
 
-def planner_instance(b: Baseline, space: SetupSpaceParams, reach_params: ReachParams,
-                     sampling: SamplingParams) -> PlannerInstance:
+def planner_instance(b: Baseline, reach_params: ReachParams, sampling: SamplingParams) -> PlannerInstance:
     """Level-1 hierarchical grid without gradient descent, dominated setups removed."""
-    res = hierarchical_sampling(CountingReach(b.reach(space, reach_params)), space,
+    res = hierarchical_sampling(CountingReach(b.reach(reach_params)), b.space,
                                 dataclasses.replace(sampling, max_levels=1), variant="none")
     return PlannerInstance(b.name, res.nondominated_setups, res.nondominated_cover, b.area, b.passes)
 
 
 def _dfbnb_row(inst: PlannerInstance, params: SetupPlannerParams, cleaning_rate: float) -> dict:
+    """One DFBnB run beside the MILP optimum of the same instance and cost model."""
+    patch_time = inst.area * inst.passes / cleaning_rate
     costs = setup_costs(inst.cover, inst.area, inst.passes, params.setup_time, cleaning_rate)
-    d = dfbnb_setup_cover(inst.cover, costs, patch_area=inst.area, params=params)
-    m = milp_setup_cover(inst.cover, costs)
+    d = dfbnb_setup_cover(inst.cover, costs, patch_area=inst.area, params=params, setup_time=params.setup_time,
+                          patch_time=patch_time)
+    if params.cost_model == "remaining":
+        m = milp_remaining_cover(inst.cover, params.setup_time, patch_time)
+    else:
+        m = milp_setup_cover(inst.cover, costs)
     gap = (d.cost - m.cost) / m.cost if (m.optimal and math.isfinite(d.cost) and m.cost > 0) else \
         (0.0 if d.cost == m.cost else math.inf)
     return dict(object=inst.name, nondominated=len(inst.cover), nodes=d.node_expansions, size=len(d.setups),
                 seconds=d.seconds, cost=d.cost, milp_cost=m.cost, milp_size=len(m.setups),
-                milp_seconds=m.seconds, gap=gap, timed_out=d.timed_out, iess=d.iess)
+                milp_seconds=m.seconds, gap=gap, timed_out=d.timed_out, node_limited=d.node_limited,
+                finished=d.finished, iess=d.iess)
 
 
-def table5(instances: dict, cleaning_rate: float, t_max: float, setup_time: float = 60.0) -> pd.DataFrame:
+def table5(instances: dict, cleaning_rate: float, max_nodes: int, setup_time: float = 60.0) -> pd.DataFrame:
     """Kabir Table V: node expansions with the pruning / guiding heuristics on and off
-    (Algorithm 2, bound eq. 2, ``T_max`` cap). Columns ``object, pruning, guiding, nodes,
-    pct_of_off_off`` plus ``timed_out, size, cost, milp_cost, gap``."""
+    (Algorithm 2, bound eq. 2), each run bounded by ``max_nodes`` (deterministic; no time bound).
+
+    Columns ``object, pruning, guiding, nodes, pct_of_off_off, timed_out, node_limited, finished``
+    plus ``size, cost, milp_cost, gap``. A row with ``finished`` False stopped at the node
+    limit: its count is a lower bound, and so is a percentage that divides by it.
+    """
     rows = []
     for inst in instances.values():
         for pruning in (False, True):
             for guiding in (False, True):
-                p = SetupPlannerParams(algorithm=2, bound="lb", pruning=pruning, guiding=guiding, t_max=t_max,
-                                       setup_time=setup_time)
+                p = SetupPlannerParams(algorithm=2, bound="lb", pruning=pruning, guiding=guiding, t_max=None,
+                                       max_nodes=max_nodes, setup_time=setup_time)
                 r = _dfbnb_row(inst, p, cleaning_rate)
                 rows.append(dict(object=inst.name, pruning=pruning, guiding=guiding, nodes=r["nodes"],
-                                 timed_out=r["timed_out"], size=r["size"], cost=r["cost"],
-                                 milp_cost=r["milp_cost"], gap=r["gap"]))
+                                 timed_out=r["timed_out"], node_limited=r["node_limited"], finished=r["finished"],
+                                 size=r["size"], cost=r["cost"], milp_cost=r["milp_cost"], gap=r["gap"]))
     df = pd.DataFrame(rows)
     off = df[(~df.pruning) & (~df.guiding)].set_index("object").nodes
     df.insert(4, "pct_of_off_off", 100.0 * df.nodes / df.object.map(off))
     return df
 
 
-def table6(instances: dict, cleaning_rate: float, t_max: float, setup_times=(0.0, 60.0, 3000.0),
-           n_repeat: int | None = None) -> pd.DataFrame:
+def table6(instances: dict, cleaning_rate: float, max_nodes: int, setup_times=(0.0, 60.0, 3000.0),
+           n_repeat: int | None = None, cost_models=("fixed", "remaining")) -> pd.DataFrame:
     """Kabir Table VI: Algorithm 2 with eq. 2 (``lb``) and eq. 7 (``b``), Algorithm 4 with eq. 7,
-    for each setup time, MILP optimum beside each. Columns ``object, setup_time, bound,
-    algorithm, nodes, size, seconds, milp_cost, gap`` plus ``cost, milp_size, timed_out, iess``."""
+    for each setup time and cost model (``fixed``: each setup's cost over all its patches;
+    ``remaining``: the paper's recomputation on the patches not yet cleaned), MILP optimum beside
+    each; every run bounded by ``max_nodes``. Columns ``object, cost_model, setup_time, bound,
+    algorithm, nodes, size, seconds, milp_cost, gap, timed_out, node_limited, finished`` plus
+    ``cost, milp_size, iess``."""
     rows = []
     for inst in instances.values():
-        for ts in setup_times:
-            for algorithm, bound in ((2, "lb"), (2, "b"), (4, "b")):
-                p = SetupPlannerParams(algorithm=algorithm, bound=bound, t_max=t_max, setup_time=ts,
-                                       n_repeat=n_repeat if algorithm == 4 else None)
-                r = _dfbnb_row(inst, p, cleaning_rate)
-                rows.append(dict(object=inst.name, setup_time=ts, bound=bound, algorithm=algorithm,
-                                 nodes=r["nodes"], size=r["size"], seconds=r["seconds"], milp_cost=r["milp_cost"],
-                                 gap=r["gap"], cost=r["cost"], milp_size=r["milp_size"],
-                                 timed_out=r["timed_out"], iess=r["iess"]))
+        for model in cost_models:
+            for ts in setup_times:
+                for algorithm, bound in ((2, "lb"), (2, "b"), (4, "b")):
+                    p = SetupPlannerParams(algorithm=algorithm, bound=bound, t_max=None, max_nodes=max_nodes,
+                                           setup_time=ts, cost_model=model,
+                                           n_repeat=n_repeat if algorithm == 4 else None)
+                    r = _dfbnb_row(inst, p, cleaning_rate)
+                    rows.append(dict(object=inst.name, cost_model=model, setup_time=ts, bound=bound,
+                                     algorithm=algorithm, nodes=r["nodes"], size=r["size"], seconds=r["seconds"],
+                                     milp_cost=r["milp_cost"], gap=r["gap"], timed_out=r["timed_out"],
+                                     node_limited=r["node_limited"], finished=r["finished"], cost=r["cost"],
+                                     milp_size=r["milp_size"], iess=r["iess"]))
     return pd.DataFrame(rows)
 
 
@@ -470,12 +553,13 @@ def contrast_setup(b: Baseline) -> np.ndarray:
     return b.setups[int(np.argmin(np.abs(reached - target)))]
 
 
-def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachParams):
+def plot_reach(b: Baseline, setup):
     """One setup seen from above in the robot base frame: reachable patches green, others red,
     the robot's joint-1 axis at the origin and the setup square dashed."""
     part = load_part(b.name, seed=b.seed)
     setup = np.asarray(setup, dtype=float)
     j = int(np.argmin(np.linalg.norm(b.setups - setup, axis=1)))
+    space = b.space
     T = base_T_part(b.setups[j][None], space)[0]
     centres = part.mesh.triangles_center[part.stain_faces] @ T[:3, :3].T + T[:3, 3]
     fig, ax = new_figure(size=(6, 5))
@@ -485,7 +569,7 @@ def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachP
     ax.plot([0], [0], "k^", ms=8, label="Puma 560 joint 1")
     sq = np.array([[space.x_min, space.y_min], [space.x_max, space.y_min], [space.x_max, space.y_max],
                    [space.x_min, space.y_max], [space.x_min, space.y_min]]) + [space.origin_x, space.origin_y]
-    ax.plot(sq[:, 0], sq[:, 1], "k--", lw=1, label="setup square (part origin)")
+    ax.plot(sq[:, 0], sq[:, 1], "k--", lw=1, label="setup space (part origin)")
     circle = np.linspace(0, 2 * np.pi, 200)
     ax.plot(0.864 * np.cos(circle), 0.864 * np.sin(circle), ":", c="grey", lw=1, label="a2 + d4 = 0.864 m")
     ax.set_aspect("equal")
@@ -498,12 +582,12 @@ def plot_reach(b: Baseline, space: SetupSpaceParams, setup, reach_params: ReachP
     return fig
 
 
-def plot_fig7(runs: pd.DataFrame, grid_size: int | None = None):
+def plot_fig7(runs: pd.DataFrame, grid_size: dict | None = None):
     """Kabir Fig. 7: n_rfc of the random-sampling runs per variant, one panel per object.
 
     Runs that never covered every coverable patch (``covers_target`` False) drew every setup of
     the grid and stop at its size: they are drawn hatched, with the count of such runs above the
-    box, and the grid size (``grid_size``) as a dotted line.
+    box, and each object's grid size (``grid_size``, name -> setups) as a dotted line.
     """
     names = list(dict.fromkeys(runs.object))
     fig, axes = new_figure(ncols=len(names), size=(4.0, 3.6))
@@ -521,8 +605,8 @@ def plot_fig7(runs: pd.DataFrame, grid_size: int | None = None):
                 top = sub[sub.variant == v].n_rfc.max()
                 ax.annotate(f"{failed}/{int((sub.variant == v).sum())}", (variants.index(v) + 1, top),
                             textcoords="offset points", xytext=(0, 4), ha="center", fontsize=7, color="tab:red")
-        if grid_size:
-            ax.axhline(grid_size, color="grey", ls=":", lw=1)
+        if grid_size and name in grid_size:
+            ax.axhline(grid_size[name], color="grey", ls=":", lw=1)
         ax.set_xticks(range(1, len(variants) + 1), variants, rotation=60, fontsize=7)
         ax.set_title(name)
         ax.set_ylabel("n_rfc")
@@ -530,18 +614,17 @@ def plot_fig7(runs: pd.DataFrame, grid_size: int | None = None):
                Patch(facecolor="white", edgecolor="tab:red", hatch="////",
                      label="runs that exhausted the grid without covering it (count above)")]
     if grid_size:
-
-        handles.append(Line2D([], [], color="grey", ls=":", label=f"grid size ({grid_size:,} setups)"))
+        handles.append(Line2D([], [], color="grey", ls=":", label="grid size of the object's setup space"))
     fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False, fontsize=8)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
     return fig
 
 
-def plot_fig8(b: Baseline, space: SetupSpaceParams, paths: pd.DataFrame, alpha: float):
+def plot_fig8(b: Baseline, paths: pd.DataFrame, alpha: float):
     """Kabir Fig. 8: coverage landscape over x-y at fixed alpha with gradient-descent paths
     (black = seed, green = end of the conservative round, red = end of the absolute round), with
     the variant's name and a legend of the stars."""
-    xs, ys, counts, a = landscape(b, space, alpha)
+    xs, ys, counts, a = landscape(b, alpha)
     n = paths.path.nunique()
     cols = min(4, n)
     fig, axes = new_figure(ncols=cols, nrows=math.ceil(n / cols), size=(3.6, 3.2))

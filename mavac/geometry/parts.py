@@ -17,9 +17,12 @@ All surfaces are open (not watertight) single sheets, triangulated on a regular 
 with face normals on the side the tool cleans from (outward/upward). Part frame: origin at the
 centre of the bounding-box bottom, z up, the part resting on z = 0.
 
-The stain is a smooth random field (a few Gaussian blobs centred on the surface, drawn from
-``seed``) thresholded at its k-th largest value, so it forms a few connected blobs of exactly
-k faces; intensity rises to 1 at the blob cores and passes come from intensity thresholds.
+The stain is a smooth random field (Gaussian blobs centred on the surface, drawn from ``seed``)
+thresholded at its k-th largest value, so it has exactly k faces; intensity rises to 1 at the
+blob cores and passes come from intensity thresholds. The synthetic objects carry one blob by
+default, one contiguous stain: "the red region" of Kabir Fig. 2(a) and Fig. 6 (``stain_blobs``
+gives several). The physical parts keep 2-4 blobs: "We applied different layers of stain on
+different regions" (Sec. IX-C).
 """
 
 from __future__ import annotations
@@ -35,6 +38,10 @@ from .mesh import check_mesh
 
 #: every part ``load_part`` knows
 PART_NAMES = ("sine", "schwefel", "concave_bowl", "hyperboloid", "bowl", "hull")
+#: Kabir Fig. 6 objects, whose stain is one region by default
+SYNTHETIC_NAMES = ("sine", "schwefel", "concave_bowl", "hyperboloid")
+#: Kabir Fig. 2(a), Fig. 6: "the red region", one Gaussian blob (min, max)
+SYNTHETIC_STAIN_BLOBS = (1, 1)
 #: Kabir, Sec. IX-A: "The area of each triangular face is less than 1.5 cm^2"
 SYNTHETIC_MAX_FACE_AREA = 1.5e-4
 #: Kabir, Sec. IX-C: "Each triangle had a surface area of less than 10 mm^2"
@@ -354,52 +361,60 @@ def stain_from_field(mesh: trimesh.Trimesh, n_stain: int, rng: np.random.Generat
     return stain, passes, intensity
 
 
-def _build(name: str, seed: int, n_stain: int | None, pass_range, notes: str) -> Part:
+def _build(name: str, seed: int, n_stain: int | None, pass_range, notes: str, stain_blobs=(2, 4)) -> Part:
     seed = check_int("seed", seed, 0, 2**63 - 1)
+    if len(stain_blobs) != 2:
+        raise ValueError(f"stain_blobs must be a (min, max) pair of blob counts, got {stain_blobs!r}")
+    lo, hi = (check_int("stain_blobs", b, 1, 50) for b in stain_blobs)
+    if lo > hi:
+        raise ValueError(f"stain_blobs: min {lo} must be <= max {hi}")
     vertices, faces = _GEOMETRY[name]()
     mesh = trimesh.Trimesh(vertices.copy(), faces.copy(), process=False)
     rng = np.random.default_rng(seed)
     if n_stain is None:
         n_stain = int(rng.integers(SYNTHETIC_STAIN_RANGE[0], SYNTHETIC_STAIN_RANGE[1] + 1))
-    stain, passes, intensity = stain_from_field(mesh, n_stain, rng, pass_range=pass_range)
+    stain, passes, intensity = stain_from_field(mesh, n_stain, rng, pass_range=pass_range, n_blobs=(lo, hi))
     return Part(name, mesh, stain, passes, intensity, notes)
 
 
-def sine_part(seed: int = 0) -> Part:
+def sine_part(seed: int = 0, *, stain_blobs=SYNTHETIC_STAIN_BLOBS) -> Part:
     """Kabir Fig. 6(a): sine surface 1.6 x 1.6 x 0.5 m, 32,768 faces < 1.5 cm^2.
 
-    The stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3 passes.
+    The stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3 passes, one
+    contiguous region unless ``stain_blobs`` asks for more.
     """
     return _build("sine", seed, None, (1, 3),
-                  "Kabir Fig. 6(a): z = sin(kx) + sin(ky), two periods, scaled to 1.6 x 1.6 x 0.5 m")
+                  "Kabir Fig. 6(a): z = sin(kx) + sin(ky), two periods, scaled to 1.6 x 1.6 x 0.5 m", stain_blobs)
 
 
-def schwefel_part(seed: int = 0) -> Part:
+def schwefel_part(seed: int = 0, *, stain_blobs=SYNTHETIC_STAIN_BLOBS) -> Part:
     """Kabir Fig. 6(b): Schwefel surface 0.6 x 0.6 x 0.35 m, 32,768 faces < 1.5 cm^2.
 
-    The stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3 passes.
+    The stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3 passes, one
+    contiguous region unless ``stain_blobs`` asks for more.
     """
     return _build("schwefel", seed, None, (1, 3),
-                  "Kabir Fig. 6(b): Schwefel function on [-500, 500]^2, scaled to 0.6 x 0.6 x 0.35 m")
+                  "Kabir Fig. 6(b): Schwefel function on [-500, 500]^2, scaled to 0.6 x 0.6 x 0.35 m", stain_blobs)
 
 
-def concave_bowl_part(seed: int = 0) -> Part:
+def concave_bowl_part(seed: int = 0, *, stain_blobs=SYNTHETIC_STAIN_BLOBS) -> Part:
     """Kabir Fig. 6(c): paraboloid bowl 1.2 x 1.2 x 0.53 m, cleaned inside, faces < 1.5 cm^2.
 
-    The stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3 passes.
+    The stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3 passes, one
+    contiguous region unless ``stain_blobs`` asks for more.
     """
     return _build("concave_bowl", seed, None, (1, 3),
-                  "Kabir Fig. 6(c) ('Conic' in Table II): paraboloid, normals into the bowl")
+                  "Kabir Fig. 6(c) ('Conic' in Table II): paraboloid, normals into the bowl", stain_blobs)
 
 
-def hyperboloid_part(seed: int = 0) -> Part:
+def hyperboloid_part(seed: int = 0, *, stain_blobs=SYNTHETIC_STAIN_BLOBS) -> Part:
     """Kabir Fig. 6(d): hyperboloid of one sheet 1.2 x 1.2 x 0.412 m, cleaned outside.
 
     Faces < 1.5 cm^2; the stain has 4000-5000 faces (count drawn from ``seed``) needing 1-3
-    passes.
+    passes, one contiguous region unless ``stain_blobs`` asks for more.
     """
     return _build("hyperboloid", seed, None, (1, 3),
-                  "Kabir Fig. 6(d): waist radius 0.4 m, end radius 0.6 m, normals outward")
+                  "Kabir Fig. 6(d): waist radius 0.4 m, end radius 0.6 m, normals outward", stain_blobs)
 
 
 def bowl_part(seed: int = 0) -> Part:
@@ -433,11 +448,19 @@ _BUILDERS = {
 }
 
 
-def load_part(name: str, seed: int = 0) -> Part:
-    """The part called ``name`` (one of :data:`PART_NAMES`) with the stain of ``seed``."""
+def load_part(name: str, seed: int = 0, *, stain_blobs=None) -> Part:
+    """The part called ``name`` (one of :data:`PART_NAMES`) with the stain of ``seed``.
+
+    ``stain_blobs``: ``(min, max)`` Gaussian blobs of the stain field (synthetic objects only;
+    default one, a single contiguous region).
+    """
     if name not in _BUILDERS:
         raise ValueError(f"name must be one of {PART_NAMES}, got {name!r}")
-    return _BUILDERS[name](seed)
+    if stain_blobs is None:
+        return _BUILDERS[name](seed)
+    if name not in SYNTHETIC_NAMES:
+        raise ValueError(f"stain_blobs applies to the synthetic objects {SYNTHETIC_NAMES}, not {name!r}")
+    return _BUILDERS[name](seed, stain_blobs=tuple(stain_blobs))
 
 
 def part_from_mesh(mesh: trimesh.Trimesh, stain_faces, passes, name: str = "custom", *,

@@ -23,9 +23,11 @@ does (Section IV); the planner itself solves the problem it is given.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import Bounds, LinearConstraint, milp
@@ -148,11 +150,11 @@ def execution_order(cover, setup_costs, chosen, patch_area=None) -> np.ndarray:
 # Input checks and the compressed bitset form
 
 
-def _check_costs(setup_costs, m: int) -> np.ndarray:
+def _check_costs(setup_costs, m: int, allow_zero: bool = False) -> np.ndarray:
     costs = np.asarray(setup_costs, dtype=float)
     if costs.shape != (m,):
         raise ValueError(f"setup_costs must have shape ({m},), got {costs.shape}")
-    if not np.all(np.isfinite(costs)) or np.any(costs <= 0):
+    if not np.all(np.isfinite(costs)) or np.any(costs < 0) or (not allow_zero and np.any(costs == 0)):
         raise ValueError("setup_costs must be finite and > 0 (c_j = t_s + t_e_j, seconds)")
     return costs
 
@@ -177,27 +179,30 @@ class _Compressed:
 
     cover: np.ndarray  # (m, k) bool, one column per group, groups ordered by first patch
     area: np.ndarray  # (k,) float, summed patch area of each group
+    time: np.ndarray  # (k,) float, summed patch execution time of each group (0 when not given)
     masks: list  # m Python ints, bit g set when setup j covers group g
     groups_setups: list  # per group, the setups covering it (ascending)
     uncoverable: np.ndarray  # (u,) int, patches no setup covers
 
 
-def _compress(cover: np.ndarray, area: np.ndarray) -> _Compressed:
-    m, _ = cover.shape
+def _compress(cover: np.ndarray, area: np.ndarray, patch_time: np.ndarray | None = None) -> _Compressed:
+    m, n = cover.shape
+    patch_time = np.zeros(n) if patch_time is None else patch_time
     coverable = cover.any(axis=0)
     uncoverable = np.flatnonzero(~coverable)
     cols = cover[:, coverable].T
     if cols.shape[0] == 0:
-        return _Compressed(np.zeros((m, 0), bool), np.zeros(0), [0] * m, [], uncoverable)
+        return _Compressed(np.zeros((m, 0), bool), np.zeros(0), np.zeros(0), [0] * m, [], uncoverable)
     uniq, first, inverse = np.unique(cols, axis=0, return_index=True, return_inverse=True)
     order = np.argsort(first, kind="stable")
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     group_area = np.bincount(rank[inverse.ravel()], weights=area[coverable], minlength=len(order))
+    group_time = np.bincount(rank[inverse.ravel()], weights=patch_time[coverable], minlength=len(order))
     ccover = np.ascontiguousarray(uniq[order].T)
     masks = row_bitsets(ccover)
     groups_setups = [np.flatnonzero(ccover[:, g]).tolist() for g in range(ccover.shape[1])]
-    return _Compressed(ccover, group_area, masks, groups_setups, uncoverable)
+    return _Compressed(ccover, group_area, group_time, masks, groups_setups, uncoverable)
 
 
 def _bits_to_bool(bits: int, k: int) -> np.ndarray:
@@ -225,14 +230,14 @@ class DFBnBResult:
         Wall time of FindSetupPlan (Algorithm 5 included for Algorithm 3).
     timed_out : bool
         True when the T_max abort (step 1) ended the search.
+    node_limited : bool
+        True when ``max_nodes`` ended the search (deterministic, unlike ``timed_out``).
     iess : int or None
         Algorithm 5's estimate (Algorithm 4 only).
     n_repeat : int or None
         ``N_repeat`` used by Algorithm 5.
     uncoverable : (u,) int
         Patches no setup covers; left out of ``P``.
-    node_limited : bool
-        True when the ``max_nodes`` budget ended the search.
     """
 
     setups: np.ndarray
@@ -245,9 +250,14 @@ class DFBnBResult:
     uncoverable: np.ndarray
     node_limited: bool = False
 
+    @property
+    def finished(self) -> bool:
+        """The search ran to the end: neither T_max nor the node limit stopped it."""
+        return not (self.timed_out or self.node_limited)
 
-def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
-                      params: SetupPlannerParams | None = None) -> DFBnBResult:
+
+def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None, params: SetupPlannerParams | None = None,
+                      patch_time=None, setup_time=None) -> DFBnBResult:
     """FindSetupPlan: Kabir's depth-first branch and bound (Algorithms 1-2 or 3-5).
 
     Parameters
@@ -260,7 +270,12 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
         For the cleaning rate of the branch-guiding heuristic; unit areas when omitted.
     params : SetupPlannerParams
         ``algorithm`` 2 or 4, ``bound`` "lb" (eq. 2) or "b" (eq. 7), ``guiding``, ``pruning``,
-        ``t_max``, ``t_decay``/``t_decay_rate``, ``n_repeat``/``iess_prob``, ``seed``.
+        ``t_max``, ``max_nodes``, ``cost_model``, ``t_decay``/``t_decay_rate``,
+        ``n_repeat``/``iess_prob``, ``seed``.
+    patch_time : (n,) float, s, optional
+        Execution time of each patch; needed with ``cost_model="remaining"``.
+    setup_time : float or (m,) float, s, optional
+        ``t_s``; needed with ``cost_model="remaining"``.
 
     Returns
     -------
@@ -268,8 +283,13 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
 
     Notes
     -----
+    With ``cost_model="remaining"`` a setup added at a node costs ``t_s + t_e`` of the patches of
+    ``P_r`` it reaches (eq. 2 and eq. 7 then take min / max of that over ``S_u``; eq. 2 stays a
+    lower bound, since any completion adds a setup whose new patches lie in ``P_r``).
+
     One node is one call AddSetUp(P_r, S_u, S_curr), run in this order:
 
+    0. stop when ``max_nodes`` nodes have been expanded (ours, deterministic);
     1. abort when the elapsed time exceeds T_max (checked at every node);
     2. (Algorithm 4) return when ``|S_curr| > IESS``;
     3. when ``P_r`` is empty: keep ``S_curr`` if ``T(S_curr) <= T*``, return;
@@ -279,8 +299,10 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
        (the lowest such patch decides); otherwise branch on every ``s`` in ``S_u``, sorted by
        decreasing cleaning rate ``R_j`` on ``P_r`` (guiding, ties by index) or by index.
 
-    The children of a node are all unused setups, so a set is met in several orders, as in
-    the paper whose node counts (Tables V-VI) measure that tree. Patches no setup covers are
+    The children of a node are all unused setups, those that reach no patch of ``P_r`` too:
+    Algorithm 2, step 5 reads "For every s in S_u in decreasing order of cleaning rate". So a
+    set is met in several orders, as in the paper whose node counts (Tables V-VI) measure that
+    tree. Patches no setup covers are
     removed from ``P`` first (otherwise no branch can ever close). The search is iterative (an
     explicit stack visited in the recursive order), on Python-int bitsets over groups of
     patches with identical coverage.
@@ -291,7 +313,8 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
     m, n = c.shape
     costs = _check_costs(setup_costs, m)
     area = _area_or_ones(patch_area, n)
-    comp = _compress(c, area)
+    ts, times = _remaining_inputs(params, setup_time, patch_time, m, n)
+    comp = _compress(c, area, times)
     deadline = math.inf if params.t_max is None else t0 + params.t_max
 
     iess = n_repeat = None
@@ -302,44 +325,69 @@ def dfbnb_setup_cover(cover, setup_costs, *, patch_area=None,
             deadline=None if params.t_max is None else deadline)
     depth_cap = m if iess is None else iess
 
-    best, best_cost, nodes, timed_out, node_limited = _search(comp, costs, params, deadline, depth_cap)
+    best, best_cost, nodes, stop = _search(comp, costs, params, deadline, depth_cap, ts)
     if best_cost < math.inf:
-        best_cost = math.fsum(float(costs[j]) for j in best)
+        best_cost = plan_cost(c, costs, best, setup_time=ts, patch_time=times)
     return DFBnBResult(
         setups=np.array(best, dtype=np.int64), cost=best_cost, node_expansions=nodes,
-        seconds=time.perf_counter() - t0, timed_out=timed_out, iess=iess, n_repeat=n_repeat,
-        uncoverable=comp.uncoverable, node_limited=node_limited)
+        seconds=time.perf_counter() - t0, timed_out=stop == "timed_out", iess=iess, n_repeat=n_repeat,
+        uncoverable=comp.uncoverable, node_limited=stop == "node_limited")
+
+
+def _remaining_inputs(params: SetupPlannerParams, setup_time, patch_time, m: int, n: int):
+    """``(t_s (m,), patch times (n,))`` for ``cost_model="remaining"``, else ``(None, None)``."""
+    if params.cost_model != "remaining":
+        return None, None
+    if setup_time is None or patch_time is None:
+        raise ValueError("cost_model='remaining' needs setup_time (s) and patch_time ((n,) s)")
+    ts = np.broadcast_to(np.asarray(setup_time, dtype=float), (m,)).copy()
+    if not np.all(np.isfinite(ts)) or np.any(ts < 0):
+        raise ValueError(f"setup_time must be finite and >= 0, got {setup_time!r}")
+    return ts, _check_patch_vector("patch_time", patch_time, n)
+
+
+def plan_cost(cover, setup_costs, chosen, *, setup_time=None, patch_time=None) -> float:
+    """``T(S)`` of a set of setups, s: ``sum c_j`` ("fixed"), or with ``setup_time`` and
+    ``patch_time`` given, ``sum t_s_j`` plus the execution time of every patch they reach, each
+    once ("remaining": the same in any order)."""
+    chosen = [int(j) for j in np.asarray(chosen, dtype=np.int64).ravel()]
+    if setup_time is None or patch_time is None:
+        return math.fsum(float(setup_costs[j]) for j in chosen)
+    c = np.asarray(cover, dtype=bool)
+    done = c[chosen].any(axis=0) if chosen else np.zeros(c.shape[1], dtype=bool)
+    ts = np.broadcast_to(np.asarray(setup_time, dtype=float), (c.shape[0],))
+    return math.fsum([float(ts[j]) for j in chosen] + np.asarray(patch_time, float)[done].tolist())
 
 
 def _search(comp: _Compressed, costs: np.ndarray, params: SetupPlannerParams, deadline: float,
-            depth_cap: int) -> tuple[tuple, float, int, bool, bool]:
-    """The depth-first search of :func:`dfbnb_setup_cover` (steps 1-5 of its Notes).
+            depth_cap: int, ts: np.ndarray | None = None) -> tuple[tuple, float, int, str]:
+    """The depth-first search of :func:`dfbnb_setup_cover` (steps 0-5 of its Notes).
 
-    Returns ``(S*, T(S*) as summed along the branch, node expansions, timed out, node limited)``.
+    Returns ``(S*, T(S*) as summed along the branch, node expansions, stop)``, ``stop`` one of
+    "finished", "timed_out", "node_limited".
     """
     m, k = comp.cover.shape
-    full = (1 << k) - 1
     cost_list = costs.tolist()
     masks = comp.masks
     cover_f = comp.cover.astype(float)
     lower = params.bound == "lb"
     decay = params.algorithm == 4 and params.t_decay > 0
+    max_nodes = math.inf if params.max_nodes is None else params.max_nodes
 
     best_cost = math.inf
     best: tuple = ()
     nodes = 0
-    timed_out = node_limited = False
-    max_nodes = math.inf if params.max_nodes is None else params.max_nodes
+    stop = "finished"
     # (P_r, S_u as a bitmask over setups, S_curr, T(S_curr))
-    stack = [(full, (1 << m) - 1, (), 0.0)]
+    stack = [((1 << k) - 1, (1 << m) - 1, (), 0.0)]
     while stack:
-        if nodes >= max_nodes:
-            node_limited = True
+        if nodes >= max_nodes:  # step 0
+            stop = "node_limited"
             break
         p_r, s_u, s_curr, t_curr = stack.pop()
         nodes += 1
         if time.perf_counter() > deadline:  # step 1
-            timed_out = True
+            stop = "timed_out"
             break
         if len(s_curr) > depth_cap:  # Algorithm 4, step 2
             continue
@@ -348,33 +396,41 @@ def _search(comp: _Compressed, costs: np.ndarray, params: SetupPlannerParams, de
                 best_cost, best = t_curr, s_curr
             continue
         unused = [j for j in range(m) if s_u >> j & 1]
+        rem = _bits_to_bool(p_r, k) if (ts is not None or params.guiding) else None
+        step = cost_list if ts is None else (ts + cover_f @ (comp.time * rem)).tolist()
         if params.pruning:  # step 4 (Alg. 2), 5 (Alg. 4)
-            unused_costs = [cost_list[j] for j in unused]
+            unused_costs = [step[j] for j in unused]
             bound = min(unused_costs) if lower else max(unused_costs)
             if decay:
                 bound += params.t_decay * math.exp(min(700.0, params.t_decay_rate * nodes))
             if t_curr + bound >= best_cost:
                 continue
-        # Step 5: a patch reachable from a single unused setup forces that setup.
-        once = twice = 0
-        for j in unused:
-            twice |= once & masks[j]
-            once |= masks[j]
-        single = p_r & ~twice
-        if single:
-            g = (single & -single).bit_length() - 1
-            forced = next(j for j in comp.groups_setups[g] if s_u >> j & 1)
-            children = [forced]
-        elif params.guiding:
-            rem_area = comp.area * _bits_to_bool(p_r, k)
-            gain = cover_f @ rem_area
-            children = sorted(unused, key=lambda j: (-gain[j] / cost_list[j], j))
-        else:
-            children = unused
+        children = _children(comp, p_r, s_u, unused, step, cover_f, rem, params.guiding)
         for j in reversed(children):
-            stack.append((p_r & ~masks[j], s_u & ~(1 << j), s_curr + (j,), t_curr + cost_list[j]))
+            stack.append((p_r & ~masks[j], s_u & ~(1 << j), s_curr + (j,), t_curr + step[j]))
 
-    return best, best_cost, nodes, timed_out, node_limited
+    return best, best_cost, nodes, stop
+
+
+def _children(comp: _Compressed, p_r: int, s_u: int, unused: list, step: list, cover_f, rem, guiding: bool):
+    """Step 5: a patch reachable from a single unused setup forces that setup; otherwise every
+    unused setup, by decreasing cleaning rate on ``P_r`` (guiding; ties by index) or by index."""
+    once = twice = 0
+    for j in unused:
+        twice |= once & comp.masks[j]
+        once |= comp.masks[j]
+    single = p_r & ~twice
+    if single:
+        g = (single & -single).bit_length() - 1
+        return [next(j for j in comp.groups_setups[g] if s_u >> j & 1)]
+    if not guiding:
+        return unused
+    gain = cover_f @ (comp.area * rem)
+
+    def rate(j):
+        return gain[j] / step[j] if step[j] > 0 else (math.inf if gain[j] > 0 else 0.0)
+
+    return sorted(unused, key=lambda j: (-rate(j), j))
 
 
 def _n_repeat(params: SetupPlannerParams, m: int) -> int:
@@ -408,6 +464,9 @@ class MilpResult:
     seconds : float
     uncoverable : (u,) int
         Patches no setup covers, dropped from the constraints.
+    dual_bound : float
+        HiGHS' proven lower bound on the optimum, s (equal to ``cost`` when optimal; ``-inf``
+        when HiGHS proved none).
     """
 
     setups: np.ndarray
@@ -416,46 +475,75 @@ class MilpResult:
     optimal: bool
     seconds: float
     uncoverable: np.ndarray
+    dual_bound: float = -math.inf
 
 
-def milp_setup_cover(cover, setup_costs, time_limit: float | None = None) -> MilpResult:
+def milp_setup_cover(cover, setup_costs, time_limit: float | None = None, *, fixed_cost: float = 0.0,
+                     allow_zero: bool = False) -> MilpResult:
     """Exact weighted set cover: ``min c.x  s.t.  cover^T x >= 1,  x in {0, 1}^m`` (HiGHS).
 
     Parameters
     ----------
     cover : (m, n) bool
-    setup_costs : (m,) float, s, > 0
+    setup_costs : (m,) float, s, > 0 (>= 0 with ``allow_zero``)
     time_limit : float, optional
         Seconds given to HiGHS; None for no limit.
+    fixed_cost : float, s
+        Added to the objective (the order-free part of a "remaining" cost).
 
     Returns
     -------
     MilpResult
-        The relative MIP gap is set to 0, so "optimal" is a certificate.
+        The relative MIP gap is set to 0, so "optimal" is a certificate; otherwise
+        ``dual_bound`` is what HiGHS proved.
     """
     t0 = time.perf_counter()
     c = check_cover(cover)
     m, n = c.shape
-    costs = _check_costs(setup_costs, m)
+    costs = _check_costs(setup_costs, m, allow_zero=allow_zero)
     if time_limit is not None and not (time_limit > 0):
         raise ValueError(f"time_limit must be > 0 s or None, got {time_limit!r}")
     comp = _compress(c, np.ones(n))
     if comp.cover.shape[1] == 0:
-        return MilpResult(np.zeros(0, np.int64), 0.0, "optimal", True,
-                          time.perf_counter() - t0, comp.uncoverable)
+        return MilpResult(np.zeros(0, np.int64), float(fixed_cost), "optimal", True,
+                          time.perf_counter() - t0, comp.uncoverable, float(fixed_cost))
     a = csr_array(comp.cover.T.astype(float))
     options = {"mip_rel_gap": 0.0}
     if time_limit is not None and math.isfinite(time_limit):
         options["time_limit"] = float(time_limit)
     res = milp(c=costs, constraints=LinearConstraint(a, lb=1.0, ub=np.inf),
                integrality=np.ones(m), bounds=Bounds(0.0, 1.0), options=options)
+    bound = getattr(res, "mip_dual_bound", None)
+    bound = -math.inf if bound is None or not np.isfinite(bound) else float(bound) + fixed_cost
     if res.x is None:
         return MilpResult(np.zeros(0, np.int64), math.inf, str(res.message), False,
-                          time.perf_counter() - t0, comp.uncoverable)
+                          time.perf_counter() - t0, comp.uncoverable, bound)
     chosen = np.flatnonzero(res.x > 0.5)
     status = {0: "optimal", 1: "time_limit"}.get(res.status, str(res.message))
-    return MilpResult(chosen.astype(np.int64), math.fsum(costs[chosen].tolist()), status,
-                      res.status == 0, time.perf_counter() - t0, comp.uncoverable)
+    cost = math.fsum(costs[chosen].tolist()) + fixed_cost
+    return MilpResult(chosen.astype(np.int64), cost, status, res.status == 0, time.perf_counter() - t0,
+                      comp.uncoverable, cost if res.status == 0 else bound)
+
+
+def milp_remaining_cover(cover, setup_time, patch_time, time_limit: float | None = None) -> MilpResult:
+    """Exact optimum of the "remaining" cost model: every reachable patch is cleaned once,
+    whatever the order, so ``T(S) = sum_{j in S} t_s_j + sum_i t_e_i`` and the MILP minimises
+    the setup times (with ``t_s = 0`` every cover is optimal).
+
+    Parameters
+    ----------
+    cover : (m, n) bool
+    setup_time : float or (m,) float, s, >= 0
+    patch_time : (n,) float, s
+    time_limit : float, optional
+    """
+    c = check_cover(cover)
+    ts, times = _remaining_inputs(SetupPlannerParams(cost_model="remaining"), setup_time, patch_time, *c.shape)
+    const = math.fsum(times[c.any(axis=0)].tolist())
+    if not np.any(ts > 0):  # every cover costs the same: all setups that reach a patch
+        return MilpResult(np.flatnonzero(c.any(axis=1)).astype(np.int64), const, "optimal", True, 0.0,
+                          np.flatnonzero(~c.any(axis=0)), const)
+    return milp_setup_cover(c, ts, time_limit, fixed_cost=const, allow_zero=True)
 
 
 def brute_force_setup_cover(cover, setup_costs, max_size: int | None = None):
@@ -514,10 +602,11 @@ class SetupCoverResult:
         Chosen setups (rows of ``cover``) in execution order: greedy by cleaning rate on the
         patches still dirty.
     cost : float
-        ``T(S) = sum_j (t_s + t_e_j)`` (eq. 1), s; 0 for an empty stain, ``inf`` when the
-        search stopped before any cover.
+        ``T(S)`` (eq. 1), s; 0 for an empty stain, ``inf`` when there is no plan (no setup
+        reaches any patch, or the search stopped before any cover).
     step_costs : (k,) float, s
-        ``c_j`` of each step.
+        Cost of each step (``c_j``; with ``cost_model="remaining"`` ``t_s`` plus the time of
+        the patches it cleans first).
     step_area : (k,) float, m^2
         Area first cleaned at each step.
     setup_time_total, execution_time_total : float or None
@@ -525,24 +614,32 @@ class SetupCoverResult:
     method : str
         "milp", "dfbnb" or "both" (the plan is then DFBnB's).
     status : str
-        "optimal" (MILP, or DFBnB Algorithm 2 with eq. 2 run to the end), "converged"
+        "optimal" (MILP proven, or DFBnB Algorithm 2 with eq. 2 run to the end), "converged"
         (Algorithm 4 or eq. 7 run to the end: heuristic, see ``certificate_gap``), "timed_out"
-        (best found before T_max), "no_solution" (T_max hit before any cover), "empty"
-        (nothing to cover); for "milp" also "time_limit" or HiGHS' message.
+        (T_max stopped the search; best plan found, if any), "node_limited" (``max_nodes``
+        stopped it), "no_solution" (no setup reaches any patch: ``uncoverable`` lists them all),
+        "empty" (no patches); for "milp" also "time_limit" or HiGHS' message.
     node_expansions : int
         DFBnB nodes (0 for "milp").
     seconds : float
-        Time of the method that produced the plan.
+        Wall time of the whole call (both methods for "both").
     timed_out : bool
     uncoverable : (u,) int
         Patches no candidate setup covers (the plan cannot clean them).
     iess : int or None
         Algorithm 5's estimate (Algorithm 4).
     certificate_cost : float or None
-        MILP optimum (method "both", or "milp").
+        MILP optimum, only when HiGHS proved it (method "both" or "milp").
     certificate_gap : float or None
-        ``(cost - certificate_cost) / certificate_cost`` (method "both").
+        ``(cost - certificate_cost) / certificate_cost`` (method "both", proven optimum only).
     certificate_seconds : float or None
+    certificate_status : str or None
+        HiGHS' status: "optimal", "time_limit", ...
+    certificate_bound : float or None
+        HiGHS' proven lower bound on the optimum (its dual bound), s.
+    node_limited : bool
+    warnings : list of str
+        E.g. a large instance given to DFBnB.
     """
 
     setups: np.ndarray
@@ -561,11 +658,19 @@ class SetupCoverResult:
     certificate_cost: float | None = None
     certificate_gap: float | None = None
     certificate_seconds: float | None = None
+    certificate_status: str | None = None
+    certificate_bound: float | None = None
+    node_limited: bool = False
+    warnings: list = field(default_factory=list)
 
 
-def solve_setup_cover(cover, setup_costs, *, patch_area=None,
-                      params: SetupPlannerParams | None = None, method: str = "milp",
-                      setup_time=None) -> SetupCoverResult:
+#: More candidate setups than this make DFBnB's tree (up to m! orders) too large to finish in
+#: general: :func:`solve_setup_cover` says so and recommends the MILP (ours: 30 setups).
+LARGE_INSTANCE = 30
+
+
+def solve_setup_cover(cover, setup_costs, *, patch_area=None, params: SetupPlannerParams | None = None,
+                      method: str = "milp", setup_time=None, patch_time=None) -> SetupCoverResult:
     """Cheapest set of setups cleaning every coverable patch (Kabir, eq. 1).
 
     Parameters
@@ -577,16 +682,21 @@ def solve_setup_cover(cover, setup_costs, *, patch_area=None,
     patch_area : (n,) float, m^2, optional
         Cleaning rates (guiding heuristic, execution order); unit areas when omitted.
     params : SetupPlannerParams, optional
-        DFBnB settings; ``t_max`` also bounds the MILP.
+        DFBnB settings; ``t_max`` bounds the whole call (MILP and DFBnB together) and
+        ``max_nodes`` the search. The defaults are bounded (60 s, 200,000 nodes).
     method : {"milp", "dfbnb", "both"}
-        "both" returns DFBnB's plan with the MILP optimum as certificate.
+        "both" returns DFBnB's plan with the MILP optimum as certificate when proven.
     setup_time : float or (m,) float, s, optional
-        The ``t_s`` part of ``setup_costs``, only to split the cost in the result.
+        The ``t_s`` part of ``setup_costs``: splits the cost in the result; needed with
+        ``params.cost_model="remaining"``.
+    patch_time : (n,) float, s, optional
+        Execution time of each patch; needed with ``params.cost_model="remaining"``.
 
     Returns
     -------
     SetupCoverResult
     """
+    t0 = time.perf_counter()
     params = SetupPlannerParams() if params is None else params
     if method not in ("milp", "dfbnb", "both"):
         raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {method!r}")
@@ -594,49 +704,104 @@ def solve_setup_cover(cover, setup_costs, *, patch_area=None,
     m, n = c.shape
     costs = _check_costs(setup_costs, m)
     area = _area_or_ones(patch_area, n)
-    ts = None
-    if setup_time is not None:
-        ts = np.broadcast_to(np.asarray(setup_time, dtype=float), (m,))
-        if not np.all(np.isfinite(ts)) or np.any(ts < 0) or np.any(ts > costs):
-            raise ValueError("setup_time must be finite, >= 0 and <= setup_costs")
-
+    ts = _split_setup_time(setup_time, costs)
+    remaining = _remaining_inputs(params, setup_time, patch_time, m, n)
+    if n == 0 or not c.any():
+        return _nothing_to_plan(m, n, method, time.perf_counter() - t0)
+    notes = _size_warnings(m, method)
+    deadline = math.inf if params.t_max is None else t0 + params.t_max
     milp_res = None
     if method in ("milp", "both"):
-        milp_res = milp_setup_cover(c, costs, time_limit=params.t_max)
+        milp_res = _certificate(c, costs, remaining, params.t_max)
     if method == "milp":
-        chosen, cost, seconds = milp_res.setups, milp_res.cost, milp_res.seconds
-        nodes, timed_out, iess = 0, milp_res.status == "time_limit", None
-        uncoverable = milp_res.uncoverable
+        chosen, cost, nodes, stop, iess = milp_res.setups, milp_res.cost, 0, "", None
         status = milp_res.status
+        stop = "timed_out" if status == "time_limit" else "finished"
     else:
-        dfb = dfbnb_setup_cover(c, costs, patch_area=area, params=params)
-        chosen, cost, seconds = dfb.setups, dfb.cost, dfb.seconds
-        nodes, timed_out, iess = dfb.node_expansions, dfb.timed_out, dfb.iess
-        uncoverable = dfb.uncoverable
-        # Only Algorithm 2 with eq. 2 is exact; Algorithm 4 and eq. 7 are heuristics.
-        exact = params.algorithm == 2 and params.bound == "lb"
-        status = "optimal" if exact else "converged"
-        if timed_out:
-            status = "timed_out" if math.isfinite(cost) else "no_solution"
-    if len(uncoverable) == n:
-        status = "empty"
-
-    order = execution_order(c, costs, chosen, area) if len(chosen) else np.zeros(0, np.int64)
-    rem = np.ones(n, dtype=bool)
-    step_area = []
-    for j in order:
-        step_area.append(float(area[c[j] & rem].sum()))
-        rem &= ~c[j]
-    result = SetupCoverResult(
-        setups=order, cost=float(cost), step_costs=costs[order], step_area=np.array(step_area),
-        setup_time_total=None if ts is None else math.fsum(ts[order].tolist()),
-        execution_time_total=None if ts is None else math.fsum((costs - ts)[order].tolist()),
-        method=method, status=status, node_expansions=int(nodes), seconds=float(seconds),
-        timed_out=bool(timed_out), uncoverable=np.asarray(uncoverable, dtype=np.int64), iess=iess)
-    if milp_res is not None:
-        result.certificate_cost = milp_res.cost
-        result.certificate_seconds = milp_res.seconds
-    if method == "both" and milp_res.optimal:
-        ref = milp_res.cost
-        result.certificate_gap = 0.0 if cost == ref else (cost - ref) / ref if ref > 0 else math.inf
+        left = max(deadline - time.perf_counter(), 1e-9) if math.isfinite(deadline) else None
+        dfb = dfbnb_setup_cover(c, costs, patch_area=area, params=dataclasses.replace(params, t_max=left),
+                                setup_time=setup_time, patch_time=patch_time)
+        chosen, cost, nodes, iess = dfb.setups, dfb.cost, dfb.node_expansions, dfb.iess
+        stop = "timed_out" if dfb.timed_out else "node_limited" if dfb.node_limited else "finished"
+        exact = params.algorithm == 2 and params.bound == "lb"  # Algorithm 4 and eq. 7 are heuristics
+        status = stop if stop != "finished" else "optimal" if exact else "converged"
+    result = _plan_result(c, costs, area, ts, remaining, chosen, cost, method, status, nodes, stop, iess)
+    result.warnings = notes
+    _attach_certificate(result, milp_res, method)
+    result.seconds = time.perf_counter() - t0
     return result
+
+
+def _split_setup_time(setup_time, costs):
+    if setup_time is None:
+        return None
+    ts = np.broadcast_to(np.asarray(setup_time, dtype=float), costs.shape)
+    if not np.all(np.isfinite(ts)) or np.any(ts < 0) or np.any(ts > costs):
+        raise ValueError("setup_time must be finite, >= 0 and <= setup_costs")
+    return ts
+
+
+def _size_warnings(m: int, method: str) -> list:
+    """A large instance given to DFBnB: say so, recommend the MILP."""
+    if method == "milp" or m <= LARGE_INSTANCE:
+        return []
+    note = (f"cover: {m} candidate setups is a large instance for DFBnB (its tree grows like m!); it stops at "
+            "params.t_max / params.max_nodes with the best plan found. method='milp' solves it exactly, "
+            "usually in well under a second")
+    warnings.warn(note, stacklevel=3)
+    return [note]
+
+
+def _certificate(c, costs, remaining, t_max) -> MilpResult:
+    ts, times = remaining
+    if ts is None:
+        return milp_setup_cover(c, costs, time_limit=t_max)
+    return milp_remaining_cover(c, ts, times, time_limit=t_max)
+
+
+def _nothing_to_plan(m: int, n: int, method: str, seconds: float) -> SetupCoverResult:
+    """No patches ("empty", cost 0), or no setup reaching any ("no_solution", no cost, all listed)."""
+    empty = n == 0
+    return SetupCoverResult(
+        setups=np.zeros(0, np.int64), cost=0.0 if empty else math.inf, step_costs=np.zeros(0),
+        step_area=np.zeros(0), setup_time_total=0.0 if empty else None,
+        execution_time_total=0.0 if empty else None, method=method, status="empty" if empty else "no_solution", node_expansions=0, seconds=seconds, timed_out=False,
+        uncoverable=np.arange(n, dtype=np.int64), certificate_cost=0.0 if empty else None,
+        certificate_gap=0.0 if empty and method == "both" else None,
+        certificate_status="optimal" if empty and method != "dfbnb" else None)
+
+
+def _plan_result(c, costs, area, ts, remaining, chosen, cost, method, status, nodes, stop, iess):
+    order = execution_order(c, costs, chosen, area) if len(chosen) else np.zeros(0, np.int64)
+    rem = np.ones(c.shape[1], dtype=bool)
+    step_area, step_costs = [], []
+    for j in order:
+        new = c[j] & rem
+        step_area.append(float(area[new].sum()))
+        step_costs.append(costs[j] if remaining[0] is None else remaining[0][j] + remaining[1][new].sum())
+        rem &= ~c[j]
+    step_costs = np.array(step_costs, dtype=float)
+    setup_total = None if ts is None else math.fsum(ts[order].tolist())
+    return SetupCoverResult(
+        setups=order, cost=float(cost), step_costs=step_costs, step_area=np.array(step_area),
+        setup_time_total=setup_total,
+        execution_time_total=None if ts is None else math.fsum(step_costs.tolist()) - setup_total,
+        method=method, status=status, node_expansions=int(nodes), seconds=0.0,
+        timed_out=stop == "timed_out", uncoverable=np.flatnonzero(~c.any(axis=0)).astype(np.int64), iess=iess,
+        node_limited=stop == "node_limited")
+
+
+def _attach_certificate(result: SetupCoverResult, milp_res: MilpResult | None, method: str) -> None:
+    """The MILP value is a certificate only when HiGHS proved it; otherwise its status and dual
+    bound are reported and no certificate is claimed."""
+    if milp_res is None:
+        return
+    result.certificate_status = milp_res.status
+    result.certificate_bound = milp_res.dual_bound
+    result.certificate_seconds = milp_res.seconds
+    if not milp_res.optimal:
+        return
+    result.certificate_cost = milp_res.cost
+    if method == "both" and math.isfinite(result.cost):
+        ref = milp_res.cost
+        result.certificate_gap = 0.0 if result.cost == ref else (result.cost - ref) / ref if ref > 0 else math.inf

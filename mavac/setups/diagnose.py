@@ -1,9 +1,12 @@
-"""Why stain patches are left out of a setup plan: too high, too far, facing away, occluded.
+"""Why stain patches are left out of a setup plan: under the support, too high, too far, facing
+away, occluded.
 
 :func:`mavac.setups.plan.plan_setups` lists the patches no candidate setup reaches. A user who
 sees "47 % of the stain unreachable" needs the likely cause, so each such patch is tested again
 over a uniform grid of the whole setup space, step by step:
 
+0. ``below_support``: the tool would have to come from below the table the part rests on
+   (:func:`mavac.setups.reach.below_support`; a stain facing down into the table);
 1. ``too_high`` / ``too_far``: no setup puts its three vertices inside the sphere that bounds
    the arm's reach (:func:`mavac.setups.reach.reach_bound`); too high when the vertical
    offset from the shoulder alone is beyond the reach, too far otherwise;
@@ -23,10 +26,11 @@ import math
 import numpy as np
 
 from ..params import ReachParams, SetupSpaceParams
-from .reach import patch_reach, reach_bound, reach_targets
+from .reach import below_support, patch_reach, reach_bound, reach_targets
 
-CAUSES = ("too_high", "too_far", "facing_away", "occluded", "missed_by_sampling")
-CAUSE_WORDS = {"too_high": "too high for the arm", "too_far": "too far from the arm",
+CAUSES = ("below_support", "too_high", "too_far", "facing_away", "occluded", "missed_by_sampling")
+CAUSE_WORDS = {"below_support": "facing down into the table the part rests on (the tool would come from below it)",
+               "too_high": "too high for the arm", "too_far": "too far from the arm",
                "facing_away": "facing away or too close to the base (no IK solution along their normal)",
                "occluded": "occluded by the part (arm collides)",
                "missed_by_sampling": "reachable on a finer grid (missed by the sampling)"}
@@ -80,10 +84,13 @@ def unreachable_causes(robot, patch_vertices, patch_normals, space: SetupSpacePa
     inside_any = (d2 <= bound.radius ** 2).all(axis=2).any(axis=0)
     high = np.abs(dz).max(axis=1) > bound.radius
     out[~inside_any] = np.where(high[~inside_any], "too_high", "too_far")
-    todo = np.flatnonzero(inside_any)
+    under = below_support(reach_targets(v, nrm), params.tool_length) if params.support_plane else np.zeros(u, bool)
+    out[under] = "below_support"
+    todo = np.flatnonzero(inside_any & ~under)
     if len(todo) == 0:
         return out
-    free = ReachParams(tool_length=params.tool_length, check_collision=False, batch_size=params.batch_size)
+    free = ReachParams(tool_length=params.tool_length, check_collision=False, batch_size=params.batch_size,
+                       support_plane=params.support_plane)
     targets = reach_targets(v[todo], nrm[todo])
     ik_any = patch_reach(robot, targets, grid, space, params=free).any(axis=0)
     out[todo[~ik_any]] = "facing_away"

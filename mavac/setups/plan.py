@@ -68,7 +68,8 @@ class SetupPlan:
         ``(cost - certificate_cost) / certificate_cost``; 0 means the plan is proven optimal
         over the candidates; None without a certificate.
     status : str
-        The planner's status ("optimal", "timed_out", "no_solution", "empty").
+        The planner's status ("optimal", "converged", "timed_out", "node_limited", "no_solution",
+        "empty"; see :class:`mavac.planning.setcover.SetupCoverResult`).
     uncoverable : (u,) int
         Patches no candidate setup reaches (not in the plan).
     seconds : float
@@ -211,7 +212,8 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
 
     t_s = params.planner.setup_time
     costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
-    res = solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method, setup_time=t_s)
+    res = solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method, setup_time=t_s,
+                            patch_time=area * passes / params.cleaning_rate)
     done = np.zeros(n, dtype=bool)
     patches, reachable = [], []
     for j in res.setups:

@@ -12,13 +12,9 @@ bounding-box bottom, z up) at
     base_T_part = Trans(origin_x + x, origin_y + y, table_z) @ Rz(alpha)
 
 in the Puma 560 base frame (the shoulder: z0 up along joint 1, the shoulder axis at z = 0, the
-floor 0.672 m below). With the defaults of :class:`mavac.params.SetupSpaceParams` the part
-centre sweeps [0.30, 1.30] m x [-0.50, 0.50] m in front of the robot, on a table whose top is
-at shoulder height (0.672 m above the floor). The Puma reaches about 0.86 m from the shoulder
-(a2 + d4 = 0.864 m): near setups reach much of a 1.2 m part, far ones only its near edge,
-tall parts rise above the shoulder so the arm reaches over them, and downward or outward
-facing stain needs the part turned; the paper gives only the range
-[0, 1 m] x [0, 1 m] x [0, 2 pi].
+floor 0.672 m below). The Puma reaches about 0.86 m from the shoulder (a2 + d4 = 0.864 m). The
+paper gives only the range [0, 1 m] x [0, 1 m] x [0, 2 pi] and how it was found (a coarse sweep,
+setups reaching no patch eliminated); :mod:`mavac.setups.space` places each part's box that way.
 
 Vectorisation
 -------------
@@ -39,6 +35,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+import trimesh
 
 from ..cache import verified_cache
 from ..geometry.transforms import se2_matrices
@@ -217,7 +214,42 @@ def patch_reach(robot, targets: ReachTargets, setups, space: SetupSpaceParams,
     chunk = max(1, params.batch_size // max(1, t))
     for a in range(0, k, chunk):
         cover[a:a + chunk] = _chunk_reach(robot, targets, setups[a:a + chunk], space, params, bound, part_mesh)
+    if params.support_plane:
+        cover[:, below_support(targets, params.tool_length)] = False
     return cover
+
+
+#: Shortest tool checked against the table, m: the tool tip's own thickness (ours).
+SUPPORT_PROBE = 0.01
+#: The table top may sit this far above a target before it counts (mesh rounding), m.
+SUPPORT_TOL = 1e-6
+
+
+def below_support(targets: ReachTargets, tool_length: float) -> np.ndarray:
+    """Patches whose tool would come from below the table top (the part frame's z = 0).
+
+    The tool runs from its tip at a vertex back along the outward normal over
+    ``max(tool_length, SUPPORT_PROBE)``; a patch is blocked when that segment of one of its
+    vertices dips below the table. The part rests on the table in every setup (setups move it
+    in x, y and alpha only), so the answer is the same for all setups.
+
+    Returns
+    -------
+    (n,) bool
+    """
+    reach_len = max(float(tool_length), SUPPORT_PROBE)
+    end_z = targets.positions[:, 2] - reach_len * targets.axes[:, 2]  # axes = -normal
+    low = np.minimum(targets.positions[:, 2], end_z) < -SUPPORT_TOL
+    return low[targets.patch_targets].any(axis=1)
+
+
+def support_slab(part_mesh, *, margin: float = 0.05, thickness: float = 0.05):
+    """The table under a part as a box (part frame): the part's footprint grown by ``margin``
+    on each side (ours), top just under z = 0 so the part's own bottom does not touch it."""
+    lo, hi = np.asarray(part_mesh.bounds, dtype=float)
+    extents = [hi[0] - lo[0] + 2 * margin, hi[1] - lo[1] + 2 * margin, thickness]
+    centre = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, -thickness / 2 - 1e-4]
+    return trimesh.creation.box(extents=extents, transform=trimesh.transformations.translation_matrix(centre))
 
 
 def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.ndarray:
@@ -260,7 +292,10 @@ def _collision_free(robot, pos, ax, setup_index, base_T_parts, params, part_mesh
     tip touches the surface at the target itself)."""
     lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax, n_restarts=params.ik_restarts)
     free = lifted.success.copy()
-    checker = CollisionChecker(robot, part_mesh, margin=params.collision_margin)
+    obstacle = part_mesh
+    if params.support_plane:  # the table under the part
+        obstacle = trimesh.util.concatenate([part_mesh, support_slab(part_mesh)])
+    checker = CollisionChecker(robot, obstacle, margin=params.collision_margin)
     for j in np.unique(setup_index):
         sel = np.flatnonzero((setup_index == j) & free)
         if len(sel):

@@ -90,18 +90,31 @@ def _resolution(space: SetupSpaceParams, resolution) -> np.ndarray:
 
 
 def _axis_values(lo: float, hi: float, res: float) -> np.ndarray:
-    # Both ends included when the range is a multiple of the step (21 x 21 x 37 in the paper).
+    # Both ends included when the range is a multiple of the step.
     count = int(math.floor((hi - lo) / res + COUNT_SLACK)) + 1
     return lo + res * np.arange(count)
+
+
+def full_circle(space: SetupSpaceParams) -> bool:
+    """Whether the alpha range is the whole circle (then alpha_max is alpha_min again)."""
+    return space.alpha_max - space.alpha_min >= 2.0 * math.pi - COUNT_SLACK
+
+
+def _alpha_values(space: SetupSpaceParams, res: float) -> np.ndarray:
+    values = _axis_values(space.alpha_min, space.alpha_max, res)
+    if full_circle(space):  # alpha_min + 2 pi is alpha_min: one pose, one setup
+        values = values[values < space.alpha_min + 2.0 * math.pi - COUNT_SLACK * res]
+    return values
 
 
 def grid_axes(space: SetupSpaceParams, resolution=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sample values along x [m], y [m] and alpha [rad] of a uniform grid.
 
-    Each axis runs from its lower bound in steps of the resolution and includes the upper bound
-    when the range is a multiple of the step, as the paper's count implies: 50 mm x 50 mm x 10 deg
-    over [0, 1 m] x [0, 1 m] x [0, 2 pi] gives 21 x 21 x 37 = 16,317 setups (alpha = 0 and
-    alpha = 2 pi are the same pose; they are kept so n_rfc matches the paper).
+    x and y run from their lower bound in steps of the resolution and include the upper bound
+    when the range is a multiple of the step. Over the whole circle alpha leaves out
+    ``alpha_min + 2 pi``, the same pose as ``alpha_min``: 50 mm x 50 mm x 10 deg over
+    [0, 1 m] x [0, 1 m] x [0, 2 pi] gives 21 x 21 x 36 = 15,876 distinct setups. (The paper's
+    16,317 = 21 x 21 x 37 counts alpha = 0 and alpha = 2 pi both.)
 
     Parameters
     ----------
@@ -112,11 +125,12 @@ def grid_axes(space: SetupSpaceParams, resolution=None) -> tuple[np.ndarray, np.
     res = _resolution(space, resolution)
     return (_axis_values(space.x_min, space.x_max, res[0]),
             _axis_values(space.y_min, space.y_max, res[1]),
-            _axis_values(space.alpha_min, space.alpha_max, res[2]))
+            _alpha_values(space, res[2]))
 
 
 def uniform_setups(space: SetupSpaceParams, resolution=None) -> np.ndarray:
-    """All setups of a uniform grid (Section IV-A1), x slowest, alpha fastest.
+    """All setups of a uniform grid (Section IV-A1), x slowest, alpha fastest; no two rows are
+    the same pose.
 
     Returns
     -------
@@ -128,6 +142,26 @@ def uniform_setups(space: SetupSpaceParams, resolution=None) -> np.ndarray:
                MAX_GRID_SETUPS, "setups")
     grid = np.stack(np.meshgrid(xs, ys, alphas, indexing="ij"), axis=-1)
     return grid.reshape(-1, 3)
+
+
+def coarse_resolution(space: SetupSpaceParams, sampling: SamplingParams) -> np.ndarray:
+    """Level-1 resolution of hierarchical sampling: ``coarse_points_*`` values per axis.
+
+    x and y: both ends of the range and evenly between (3 points: 0, half, all of it); alpha over
+    the whole circle: ``coarse_points_alpha`` distinct angles (4: 0, 90, 180, 270 deg), else both
+    ends. A single point uses the whole range as its step (only the lower bound is sampled).
+
+    Returns
+    -------
+    (3,) float: ``(res_x [m], res_y [m], res_alpha [rad])``.
+    """
+    def step(lo, hi, points):
+        return (hi - lo) / (points - 1) if points > 1 and hi > lo else max(hi - lo, 1.0)
+
+    alpha = (2.0 * math.pi / sampling.coarse_points_alpha if full_circle(space)
+             else step(space.alpha_min, space.alpha_max, sampling.coarse_points_alpha))
+    return np.array([step(space.x_min, space.x_max, sampling.coarse_points_x),
+                     step(space.y_min, space.y_max, sampling.coarse_points_y), alpha])
 
 
 def hierarchy_resolution(coarse, level: int) -> np.ndarray:
@@ -181,7 +215,9 @@ def score(p1: np.ndarray, p2: np.ndarray, scoring: str) -> np.ndarray:
 
 
 def _wrap_alpha(alpha: np.ndarray, space: SetupSpaceParams) -> np.ndarray:
-    return space.alpha_min + np.mod(alpha - space.alpha_min, 2.0 * math.pi)
+    turn = np.mod(alpha - space.alpha_min, 2.0 * math.pi)
+    # a float a hair under a full turn is the start again (300 + 60 deg is 0 deg, one setup)
+    return space.alpha_min + np.where(turn > 2.0 * math.pi - 1e-9, 0.0, turn)
 
 
 def neighbours(setup, axes, step, space: SetupSpaceParams) -> np.ndarray:
@@ -397,7 +433,7 @@ def hierarchical_sampling(reach: ReachFn, space: SetupSpaceParams, sampling: Sam
                           *, variant: str = "CA_XY", target=None) -> SamplingResult:
     """Hierarchical uniform sampling with gradient descent (Section IV-A2).
 
-    Level 1 is a uniform grid at the coarse resolution (``SamplingParams.coarse_res_*``); every
+    Level 1 is a uniform grid at the coarse resolution (:func:`coarse_resolution`); every
     further level halves one axis (:func:`hierarchy_resolution`). At each level the grid setups
     not seen at an earlier level are refined by ``variant`` and added to ψ; the search stops at
     the first level whose setups cover every target patch, or after ``max_levels``.
@@ -415,7 +451,7 @@ def hierarchical_sampling(reach: ReachFn, space: SetupSpaceParams, sampling: Sam
     variant_plan(variant)
     reach = _counting(reach)
     before = reach.n_rfc
-    coarse = np.array([sampling.coarse_res_x, sampling.coarse_res_y, sampling.coarse_res_alpha])
+    coarse = coarse_resolution(space, sampling)
     seen: set = set()
     psi: _Psi | None = None
     tgt = None

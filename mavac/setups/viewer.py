@@ -8,6 +8,7 @@ import math
 import numpy as np
 import trimesh
 
+from ..geometry.transforms import check_transforms
 from ..params import SetupPlanParams
 from ..robots.kinematics import ik_axis
 from ..robots.models import puma560
@@ -44,6 +45,7 @@ def setup_motion(robot, part, plan, base_T_parts):
     """Animation keys of a setup plan: per setup, the part is placed (arm at home), then the arm
     touches one of the setup's patches (:func:`_setup_arm`). Returns ``times (f,)``,
     ``setups (f, 3)`` and ``qs (f, nq)`` as :func:`pose_set_motion`."""
+    base_T_parts = check_transforms("base_T_parts", base_T_parts)
     keys = Keys(plan.setups[0], robot.q_home)
     for j, setup in enumerate(plan.setups):
         if j:
