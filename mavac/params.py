@@ -950,9 +950,9 @@ def _cell_space() -> SetupSpaceParams:
 
 
 def _cell_sampling() -> SamplingParams:
-    # Level 1 of hierarchical sampling keeps the paper's 36 = 3 x 3 x 4 setups (Table III) on
-    # the cell's 0.30 m square: 150 mm x 150 mm x 120 deg (ours); descent steps as for the Puma.
-    return SamplingParams(coarse_res_x=0.15, coarse_res_y=0.15)
+    # Level 1 of hierarchical sampling keeps the paper's 36 = 3 x 3 x 4 setups (Table III): on
+    # the cell's 0.30 m square that is 150 mm x 150 mm x 90 deg; descent steps as for the Puma.
+    return SamplingParams()
 
 
 @dataclass(frozen=True)
