@@ -93,8 +93,10 @@ def test_setup_page_animates_the_part_through_its_setups(tmp_path):
     cmds = commands(path.read_text())
     anim = next(c for c in cmds if c["type"] == "set_animation")
     part_clip = next(a["clip"] for a in anim["animations"] if a["path"] == "/meshcat/part")
-    positions = next(t for t in part_clip["tracks"] if t["name"] == ".position")["keys"]
-    placed = {tuple(np.round(k["value"], 6)) for k in positions}
+    tracks = {t["name"]: t["keys"] for t in part_clip["tracks"]}
+    # A placement is position and orientation: two setups may differ in alpha alone.
+    placed = {tuple(np.round(np.r_[p["value"], q["value"]], 6))
+              for p, q in zip(tracks[".position"], tracks[".quaternion"])}
     assert len(placed) == len(plan.setups)  # one placement per setup
 
 
