@@ -27,8 +27,9 @@ from mavac.params import BimanualCellParams
 from mavac.robots import kinematics as K
 from mavac.sim.cell import cell_robots
 
+from bench_ik import timed  # benchmarks run as scripts: their folder is on sys.path
+
 MAX_ITER, N_RESTARTS, POS_TOL, ROT_TOL, DAMPING, MAX_STEP = 50, 8, 1e-5, 1e-4, 1e-6, 1.0
-REPEATS = 3
 
 
 def pinocchio_axis_dls(robot, p_t, z_t, q0, rng):
@@ -64,24 +65,13 @@ def pinocchio_axis_dls(robot, p_t, z_t, q0, rng):
     return q, False
 
 
-def _timed(fn):
-    """``(result, cpu_s, wall_s)`` of the fastest (CPU) of ``REPEATS`` runs of ``fn``."""
-    best = None
-    for _ in range(REPEATS):
-        c0, w0 = time.process_time(), time.perf_counter()
-        out = fn()
-        run = (out, time.process_time() - c0, time.perf_counter() - w0)
-        best = run if best is None or run[1] < best[1] else best
-    return best
-
-
 def ik_ratio(n_targets: int = 5000, n_reference: int = 300) -> float:
     """Batched vs per-point axis IK of the iiwa pad; prints both rates, returns the ratio."""
     cleaner, _ = cell_robots(BimanualCellParams())
     rng = np.random.default_rng(0)
     T = K.fk(cleaner, rng.uniform(cleaner.q_lower, cleaner.q_upper, (n_targets, cleaner.nq)))
     p, a = T[:, :3, 3], T[:, :3, 2]
-    res, cpu_b, wall_b = _timed(lambda: K.ik_axis(
+    res, cpu_b, wall_b = timed(lambda: K.ik_axis(
         cleaner, p, a, method="dls", rng=np.random.default_rng(1), max_iter=MAX_ITER, n_restarts=N_RESTARTS,
         pos_tol=POS_TOL, rot_tol=ROT_TOL, damping=DAMPING, max_step=MAX_STEP))
 
@@ -89,7 +79,7 @@ def ik_ratio(n_targets: int = 5000, n_reference: int = 300) -> float:
         r = np.random.default_rng(1)
         return [pinocchio_axis_dls(cleaner, p[i], a[i], cleaner.q_home, r)[1] for i in range(n_reference)]
 
-    ok_ref, cpu_r, wall_r = _timed(reference)
+    ok_ref, cpu_r, wall_r = timed(reference)
     rate_b, rate_r = n_targets / cpu_b, n_reference / cpu_r
     print(f"iiwa pad axis IK, batched, {n_targets} targets: {rate_b:,.0f} targets/s CPU "
           f"({cpu_b:.2f} s CPU, {wall_b:.2f} s wall), success {res.success.mean():.4f}")

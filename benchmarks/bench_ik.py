@@ -64,7 +64,7 @@ def _reference(robot, targets):
     return [pinocchio_dls(robot, pin.SE3(T), robot.q_home, rng)[1] for T in targets]
 
 
-def _timed(fn):
+def timed(fn):
     """``(result, cpu_s, wall_s)`` of the fastest (CPU) of ``REPEATS`` runs of ``fn``."""
     best = None
     for _ in range(REPEATS):
@@ -80,16 +80,16 @@ def main(n_targets: int = 10000, n_reference: int = 1000) -> float:
     rng = np.random.default_rng(0)
     targets = K.fk(robot, rng.uniform(-np.pi, np.pi, (n_targets, robot.nq)))
 
-    res, cpu_b, wall_b = _timed(lambda: K.ik(
+    res, cpu_b, wall_b = timed(lambda: K.ik(
         robot, targets, rng=np.random.default_rng(1), max_iter=MAX_ITER, n_restarts=N_RESTARTS,
         pos_tol=POS_TOL, rot_tol=ROT_TOL, damping=DAMPING, max_step=MAX_STEP))
-    ok_ref, cpu_r, wall_r = _timed(lambda: _reference(robot, targets[:n_reference]))
+    ok_ref, cpu_r, wall_r = timed(lambda: _reference(robot, targets[:n_reference]))
 
     puma = puma560(tool_length=0.1)
     qp = rng.uniform(puma.q_lower, puma.q_upper, (1_000_000, 6))
     Tp = K.fk(puma, qp)
     pos, ax = Tp[:, :3, 3] + rng.normal(scale=0.2, size=(len(qp), 3)), Tp[:, :3, 2]
-    cf, cpu_c, wall_c = _timed(lambda: K.ik_axis(puma, pos, ax))
+    cf, cpu_c, wall_c = timed(lambda: K.ik_axis(puma, pos, ax))
 
     rate_b, rate_r = n_targets / cpu_b, n_reference / cpu_r
     print(f"UR10 full-pose IK, batched, {n_targets} targets: {rate_b:,.0f} targets/s CPU "
