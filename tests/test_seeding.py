@@ -28,8 +28,10 @@ def test_seed_out_of_range_names_parameter(bad):
 
 
 def test_bad_types():
-    with pytest.raises(TypeError, match="seed"):
+    with pytest.raises(ValueError, match="seed must be an integer"):
         check_seed(1.5)
+    with pytest.raises(TypeError, match="seed"):
+        check_seed("1")
     with pytest.raises(TypeError, match="stage"):
         rng_for(1, "")
     with pytest.raises(ValueError, match="index"):
