@@ -182,6 +182,63 @@ def _pct(series: pd.Series) -> str:
     return DASH if series.empty else f"{100 * float(series.iloc[0]):.1f} %"
 
 
+def mavac_machines() -> Part:
+    """MAVAC's machines (notebook 01): size, exposed area and heaps against the paper's description."""
+    ours = _read("machines.csv", ("machine", "size_x", "size_y", "size_z", "exposed_area", "heaps"))
+    scal = {q: _paper_scalar_or_none("Discussion", q) for q in ("exposed_area_min", "exposed_area_max",
+                                                                "heaps_min", "heaps_max")}
+    rows = [[r.machine.replace("_", " "), f"{r.size_x:.2f} × {r.size_y:.2f} × {r.size_z:.2f}",
+             f"{r.exposed_area:.2f}", r.heaps] for r in ours.itertuples()]
+    area = f"{_fmt(scal['exposed_area_min'])}-{_fmt(scal['exposed_area_max'])}"
+    rows.append(["paper", "test bench 2 × 1 × 1", area, f"{_fmt(scal['heaps_min'])}-{_fmt(scal['heaps_max'])}"])
+    body = _table(["machine", "size (m)", "exposed area (m²)", "heaps at 10 cm"], rows)
+    body += ("\n\nOur machines are procedural stand-ins (the test bench is four separate boxes on the paper's "
+             "footprint), so they hold fewer heaps than the paper's. " + _source("machines.csv"))
+    return Part(body)
+
+
+def _best_radius(df: pd.DataFrame) -> list[list]:
+    """Per machine, then for all machines at once (mean rate), the factor that misclassifies least."""
+    rows = []
+    for machine, g in df.groupby("machine", sort=False):
+        best = g.loc[g["agreement"].idxmax()]
+        rows.append([machine.replace("_", " "), best["radius_factor"], f"{100 * (1 - best['agreement']):.1f} %"])
+    mean = df.groupby("radius_factor")["agreement"].mean()
+    rows.append(["one factor for all machines", mean.idxmax(), f"{100 * (1 - mean.max()):.1f} % (mean)"])
+    return rows
+
+
+def mavac_hpr_radius() -> Part:
+    """HPR's radius factor calibrated against exact ray casting, at spot viewpoints and at guard views."""
+    cols = ("machine", "radius_factor", "agreement")
+    spots, guards = _read("mavac_hpr_radius_spots.csv", cols), _read("mavac_hpr_radius.csv", cols)
+    g_rows = {r[0]: r for r in _best_radius(guards)}
+    rows = [r + g_rows.get(r[0], [None, DASH, DASH])[1:] for r in _best_radius(spots)]
+    body = _table(["machine", "best factor, spot viewpoints", "misclassified", "best factor, guard views",
+                   "misclassified"], rows)
+    body += ("\n\nThe radius factor of hidden point removal that misclassifies the fewest (element, viewpoint) "
+             "pairs against ray casting; the paper does not give its radius. "
+             + _source("mavac_hpr_radius_spots.csv", "mavac_hpr_radius.csv", paper=False))
+    return Part(body)
+
+
+def mavac_k1() -> Part:
+    """MAVAC, Results: the effect of k1 on the coverage of the guards (the paper: none)."""
+    ours = _read("mavac_k1_effect.csv", ("machine", "maneuverability", "k1", "C_guards"))
+    means = ours.groupby(["machine", "maneuverability", "k1"], sort=False)["C_guards"].mean()
+    rows = []
+    for (machine, variant), g in means.groupby(level=[0, 1], sort=False):
+        c = g.droplevel([0, 1])
+        rows.append([machine.replace("_", " "), variant, c.get(c.index.min()), c.get(c.index.max()),
+                     c.get(c.index.max()) - c.get(c.index.min())])
+    body = _table(["machine", "maneuverability index", "C of the guards, k1 = 0", "k1 = 1", "change"], rows)
+    change = _paper_scalar_or_none("Results", "C_change_with_k1")
+    body += (f"\n\nThe paper says k1 does not affect C (a change of {_fmt(change)}). Means over seeds; k1 weighs "
+             "the maneuverability index I_m in the guard score (eq. 3), so the variants of I_m show where the "
+             "effect comes from. " + _source("mavac_k1_effect.csv"))
+    return Part(body)
+
+
 def mavac_plans() -> Part:
     """MAVAC's final plans at the paper's recommended parameters (no paper numbers to compare)."""
     cols = ("machine", "visibility", "elements", "spots", "guards", "nos_guards", "C", "O")
@@ -260,7 +317,41 @@ def mavac_table2() -> Part:
     return Part(body, "; ".join(paper_heads.values()) or DASH, "; ".join(heads) or DASH)
 
 
+def mavac_misses() -> Part:
+    """Why uncleaned heaps were missed and where the simulated time went (SIMULATED, notebook 05)."""
+    misses = _read("mavac_online_misses.csv", ("machine",))
+    causes = [c for c in misses.columns if c != "machine"]
+    body = _table(["machine"] + causes, [[r["machine"].replace("_", " ")] + [r[c] for c in causes]
+                                          for _, r in misses.iterrows()])
+    times = _read("mavac_online_times.csv", ("machine", "base_s", "arm_s", "vacuum_s", "guards",
+                                             "median_peak_force_n"))
+    t = times.groupby("machine", sort=False)[["guards", "base_s", "arm_s", "vacuum_s", "median_peak_force_n"]].mean()
+    body += ("\n\nUncleaned heaps by cause, summed over the trials; the paper names two causes anecdotally. "
+             "Per trial, means:\n\n" + _table(["machine", "guards visited", "base travel (s)", "arm motion (s)",
+                                              "vacuuming (s)", "median peak contact force (N)"],
+                                             [[m.replace("_", " "), *r] for m, r in t.iterrows()]))
+    body += ("\n\n**SIMULATED**. Peak forces include one-step impacts of pybullet's rigid contacts. "
+             + _source("mavac_online_misses.csv", "mavac_online_times.csv", paper=False))
+    return Part(body)
+
+
 # ---------------------------------------------------------------- Kabir et al.
+
+def kabir_setup_space() -> Part:
+    """Kabir Sec. IV-A / IX-A: each object's setup space, placed by the paper's coarse-sweep procedure."""
+    cols = ("object", "x_lo", "x_hi", "y_lo", "y_hi", "grid_setups")
+    ours = _read("kabir_setup_space.csv", cols)
+    rows = [[r.object.replace("_", " "), f"[{_fmt(r.x_lo)}, {_fmt(r.x_hi)}]", f"[{_fmt(r.y_lo)}, {_fmt(r.y_hi)}]",
+             r.grid_setups] for r in ours.itertuples()]
+    x, y = (_paper_values_rows("kabir", "Sec. IX-A", q)["value"].iloc[0] for q in ("x_range", "y_range"))
+    rows.append(["paper (every object)", f"[0, {_fmt(float(x))}]", f"[0, {_fmt(float(y))}]", DASH])
+    body = _table(["object", "x (m)", "y (m)", "setups on the 50 mm × 50 mm × 10° grid"], rows)
+    body += ("\n\nPart centre in the robot's base frame. The paper gives the range it ended with and how it found "
+             "it (a coarse sweep over a wide range, setups that reach no patch eliminated); we run that procedure "
+             "per object (a 0.1 m × 0.1 m × 30° sweep). The near edge x = 0 is the table edge we assume. "
+             "See [conventions](conventions.md). " + _source("kabir_setup_space.csv"))
+    return Part(body)
+
 
 def kabir_table2() -> Part:
     """Kabir Table II: the uniform-sampling baseline per object."""
@@ -383,6 +474,21 @@ def kabir_table7() -> Part:
                 _slash(_lookup(ours, "solution_size_ours", part=p) for p in ("bowl", "hull")))
 
 
+def _gpr_acceptance() -> str:
+    """How often the paper's acceptance rule, P(C_p >= th) >= P_th, held up (optional: kabir_gpr.csv)."""
+    try:
+        runs = _read("kabir_gpr.csv", ("part", "method", "predicted_feasible", "measured_meets", "true_meets"))
+    except NotRun:
+        return ""
+    gpr = runs[runs["method"] == "gpr"]
+    rows = [[part, len(g), *(int(g[c].astype(str).eq("True").sum()) for c in ("predicted_feasible", "measured_meets",
+                                                                          "true_meets"))]
+            for part, g in gpr.groupby("part", sort=False)]
+    return ("The GPR answers under the paper's acceptance rule, P(C_p ≥ th) ≥ P_th (SIMULATED scrubbing model):\n\n"
+            + _table(["part", "GPR runs", "accepted by the rule", "measured C_p meets the threshold",
+                      "noise-free C_p meets it"], rows) + "\n\n")
+
+
 def kabir_gpr() -> Part:
     """Kabir Sec. VIII / IX-C: GPR operating parameters (paper) and the learner against random search (ours)."""
     ours = _read("kabir_gpr_speedup.csv", ("part", "cp_tol", "gpr_median", "random_median", "ratio"))
@@ -394,7 +500,7 @@ def kabir_gpr() -> Part:
     body += ("\n\nExperiments needed to reach a point near the optimum on the simulated scrubbing model (notebook "
              "10); the paper gives no such count. The paper's learned operating parameters, for reference:\n\n"
              + _table(["part", "v", "f_n (N)", "kappa (N/m)", "f_x (Hz)", "A_x (N)"], prow)
-             + "\n\n" + _source("kabir_gpr_speedup.csv"))
+             + "\n\n" + _gpr_acceptance() + _source("kabir_gpr_speedup.csv", "kabir_gpr.csv"))
     ratio = ", ".join(f"{r.part} {r.ratio:.1f}×" for r in ours[ours["cp_tol"] > 0].itertuples())
     return Part(body,
                 "GPR needs fewer experiments (no count)", f"random search needs {ratio} as many" if ratio else DASH)
@@ -459,10 +565,15 @@ def beyond_visibility() -> Part:
 
 # (paper, title, anchor, function): the order of docs/results.md and of the README's table
 SECTIONS = (
+    ("MAVAC", "Machines", "mavac-machines", mavac_machines),
     ("MAVAC", "Table 1: spots against P_s", "mavac-table-1", mavac_table1),
+    ("MAVAC", "HPR radius against ray casting", "mavac-hpr-radius", mavac_hpr_radius),
     ("MAVAC", "Fig. 6: guards against P_g", "mavac-fig-6", mavac_fig6),
+    ("MAVAC", "Results: the effect of k1", "mavac-k1", mavac_k1),
     ("MAVAC", "Final inspection plans", "mavac-plans", mavac_plans),
     ("MAVAC", "Table 2: cleaning trials (SIMULATED)", "mavac-table-2", mavac_table2),
+    ("MAVAC", "Why heaps were missed (SIMULATED)", "mavac-misses", mavac_misses),
+    ("Kabir", "Setup space", "kabir-setup-space", kabir_setup_space),
     ("Kabir", "Table II: uniform-sampling baseline", "kabir-table-ii", kabir_table2),
     ("Kabir", "Table III: hierarchical sampling", "kabir-table-iii", kabir_table3),
     ("Kabir", "Table IV: random sampling", "kabir-table-iv", kabir_table4),
