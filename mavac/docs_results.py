@@ -627,7 +627,7 @@ def readme_block(secs: list[Section] | None = None) -> str:
             for s in secs if s.paper_says != DASH or s.ours == "not run"]
     note = ("Kabir's objects in the order sine / Schwefel / concave bowl / hyperboloid (Table V: sine / "
             "concave bowl / hyperboloid). SIMULATED: pybullet stand-ins for the papers' robots and cells.")
-    return "\n".join([START, "", _table(["paper", "table", "the paper", "ours"], rows), "", note, "", END])
+    return "\n".join([START, "", _table(["paper", "table or figure", "the paper", "ours"], rows), "", note, "", END])
 
 
 def replace_block(readme: str, block: str) -> str:
