@@ -275,7 +275,8 @@ def _table2_groups(ours: pd.DataFrame) -> tuple[list[str], pd.core.groupby.DataF
 
 
 def _label(name) -> str:
-    return str(name).replace("+", " + ").replace("_", " ")
+    """'sanding+milling' and 'sanding_milling' both read 'sanding + milling'; 'test_bench' 'test bench'."""
+    return "sanding + milling" if _scene_key(name) == "sandingmilling" else str(name).replace("_", " ")
 
 
 def _table2_row(key: tuple, g: pd.DataFrame, p: pd.DataFrame | None) -> list:

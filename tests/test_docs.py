@@ -56,8 +56,8 @@ def test_table2_reads_the_layout_with_readings_scenes_and_summary_rows(tmp_path,
     part = docs_results.mavac_table2()
     assert "| reading | machine |" in part.body and "999" not in part.body
     assert "| authors | test bench | 2 | 80.0 ± 1.4 % | 87.8 % |" in part.body
-    assert "| paper | sanding milling | 2 | 70.0 ± 1.4 % | 80.2 % |" in part.body
-    assert "paper test bench 70.0 %" in part.ours and "authors sanding milling 80.0 %" in part.ours
+    assert "| paper | sanding + milling | 2 | 70.0 ± 1.4 % | 80.2 % |" in part.body
+    assert "paper test bench 70.0 %" in part.ours and "authors sanding + milling 80.0 %" in part.ours
 
 
 def _modules_on_disk() -> set[str]:
