@@ -1,0 +1,103 @@
+"""docs/: the results page and the README's results table are generated from the committed CSVs
+and current; the architecture page names every module on disk (and no other); links resolve."""
+
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from mavac import docs_results
+from mavac.config import ROOT
+
+DOCS = ROOT / "docs"
+PACKAGE = ROOT / "mavac"
+REGENERATE = "stale: run `python -m mavac.docs_results`"
+
+
+def test_results_page_is_current():
+    assert (DOCS / "results.md").read_text() == docs_results.results_page(), REGENERATE
+
+
+def test_readme_results_block_is_current():
+    readme = (ROOT / "README.md").read_text()
+    assert docs_results.START in readme and docs_results.END in readme
+    assert docs_results.replace_block(readme, docs_results.readme_block()) == readme, REGENERATE
+
+
+def test_every_section_has_data_and_robot_results_say_simulated():
+    secs = docs_results.sections()
+    assert [s for s in secs if "Not run" in s.body] == []
+    for s in secs:
+        if s.anchor in ("mavac-table-2", "kabir-table-vii", "kabir-execution"):
+            assert "SIMULATED" in s.item and "**SIMULATED**" in s.body
+    assert len({s.anchor for s in secs}) == len(secs)
+
+
+def test_missing_csv_or_column_says_not_run(tmp_path, monkeypatch):
+    pd.DataFrame({"machine": ["test_bench"], "trial": [1]}).to_csv(tmp_path / "mavac_table2.csv", index=False)
+    monkeypatch.setattr(docs_results, "RESULTS_DIR", tmp_path)
+    secs = {s.anchor: s for s in docs_results.sections()}
+    assert "`data/results/mavac_table1.csv` is not there" in secs["mavac-table-1"].body
+    assert "no column `cleaning_pct`" in secs["mavac-table-2"].body
+    assert secs["kabir-table-ii"].ours == "not run"
+    assert "not run" in docs_results.readme_block(list(secs.values()))
+
+
+def test_table2_reads_the_layout_with_readings_scenes_and_summary_rows(tmp_path, monkeypatch):
+    rows = [dict(reading=r, scene=sc, trial=t, heaps=h, cleaning_pct=pct, precision=1.0, recall=0.9,
+                 sim_time_s=300.0)
+            for r, base in (("paper", 70.0), ("authors", 80.0))
+            for sc, h in (("test_bench", 87), ("sanding_milling", 238))
+            for t, pct in ((1, base - 1), (2, base + 1))]
+    rows += [dict(reading="paper", scene="test_bench", trial="mean", heaps=87, cleaning_pct=999.0)]
+    pd.DataFrame(rows).to_csv(tmp_path / "mavac_table2.csv", index=False)
+    monkeypatch.setattr(docs_results, "RESULTS_DIR", tmp_path)
+    part = docs_results.mavac_table2()
+    assert "| reading | machine |" in part.body and "999" not in part.body
+    assert "| authors | test bench | 2 | 80.0 ± 1.4 % | 87.8 % |" in part.body
+    assert "| paper | sanding + milling | 2 | 70.0 ± 1.4 % | 80.2 % |" in part.body
+    assert "paper test bench 70.0 %" in part.ours and "authors sanding + milling 80.0 %" in part.ours
+
+
+def _modules_on_disk() -> set[str]:
+    return {p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("*.py")
+            if p.name != "__init__.py" and "__pycache__" not in p.parts}
+
+
+def _modules_on_page() -> set[str]:
+    text = (DOCS / "architecture.md").read_text()
+    return set(re.findall(r"^- `([\w/]+\.py)`:", text, re.M))
+
+
+def test_architecture_names_every_module():
+    missing = sorted(_modules_on_disk() - _modules_on_page())
+    assert not missing, f"docs/architecture.md lacks a line for: {missing}"
+
+
+def test_architecture_names_no_module_that_is_gone():
+    gone = sorted(_modules_on_page() - _modules_on_disk())
+    assert not gone, f"docs/architecture.md describes modules not in mavac/: {gone}"
+
+
+def _links(page: Path):
+    for target in re.findall(r"\]\(([^)\s]+)\)", page.read_text()):
+        if not re.match(r"[a-z]+:", target):
+            yield target
+
+
+@pytest.mark.parametrize("page", [ROOT / "README.md", *sorted(DOCS.glob("*.md"))], ids=lambda p: p.name)
+def test_relative_links_resolve(page):
+    broken = []
+    for target in _links(page):
+        path, _, anchor = target.partition("#")
+        dest = (page.parent / path).resolve() if path else page
+        if not dest.exists():
+            broken.append(target)
+        elif anchor and dest.suffix == ".md":
+            text = dest.read_text()
+            slugs = {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-")
+                     for h in re.findall(r"^#+ (.*)$", text, re.M)}
+            if f'id="{anchor}"' not in text and anchor not in slugs:
+                broken.append(target)
+    assert not broken, f"{page.name}: links that lead nowhere: {broken}"
