@@ -365,7 +365,7 @@ def dust_heaps(machine: Machine, *, spacing: float = 0.10, seed: int = 0,
     MAVAC (Experimental setup): "green dust heaps are evenly distributed at intervals of 10 cm
     on the surface, including within the concavities". We take every face whose normal is
     within ``arccos(min_normal_z)`` of vertical, concavities included (cavity floors, the
-    feed tunnel, inside the enclosure), and Poisson-disk sample it with
+    sander's shelf, inside the milling enclosure), and Poisson-disk sample it with
     :func:`mavac.geometry.surface.sample_surface`, so the count is about
     ``area / spacing**2``; the scenes' upward areas are sized so that this count is Table 2's
     (see the module docstring).
