@@ -20,7 +20,7 @@ length (156.2 heaps for sanding + milling). Table 2's counts are then met: 146 a
 Conflict with the Discussion. The Discussion gives "144 to 160 dust heaps distributed across
 surfaces ranging from 5 to 6 m^2". At 10 cm spacing 5-6 m^2 of dust-bearing surface would
 hold 500-600 heaps, so the 5-6 m^2 can only be the whole exposed surface. We follow the heap
-count; the exposed areas it leaves are 6.5 m^2 for the test bench and 8.8 m^2 for sanding +
+count; the exposed areas it leaves are 6.5 m^2 for the test bench and 8.9 m^2 for sanding +
 milling (3.1 + 5.8 m^2), above the Discussion's 6 m^2.
 
 Dust heaps: "green dust heaps are evenly distributed at intervals of 10 cm on the surface,
@@ -174,16 +174,18 @@ def _test_bench_geometry():
 
 
 #: Sanding machine: the paper says only "a sanding machine ... in a fabrication laboratory"
-#: with "complex structures with concavities and hard-to-reach areas". Ours: a combination
-#: belt-and-disc sander on a cabinet stand, the usual sander of a fabrication laboratory.
-#: Its length SANDER_LENGTH is derived from the heap count: with the milling machine as built
-#: (0.913 m^2 upward), the pair's upward area equals Table 2's mean of 156.2 sanding + milling
-#: heaps at 10 cm spacing (1.562 m^2) when the sander's upward area is 0.649 m^2, i.e.
-#: 0.95 * L + 0.020 m^2 (stand top 0.5 L and shelf floor 0.45 (L - 0.1), plus disc table and
-#: disc-guard top, less the stand top under the disc) = 0.649, so L = 0.662 m.
-SANDER_LENGTH = 0.662
-#: stand depth (ours: a bench-tool stand about as deep as the sander it carries)
-SANDER_DEPTH = 0.5
+#: with "complex structures with concavities and hard-to-reach areas", and reports no enclosed
+#: region on it (only the milling machine's box). Ours: a combination belt-and-disc sander,
+#: the usual sander of a fabrication laboratory, on a closed cabinet stand; its concavities
+#: are the overhanging disc table and the corners between belt housing, disc and stand top.
+#: SANDER_LENGTH is derived from the heap count: with the milling machine as built (0.913 m^2
+#: upward), the pair's upward area equals Table 2's mean of 156.2 sanding + milling heaps at
+#: 10 cm spacing (1.562 m^2) when the sander's is 0.649 m^2, i.e. D * L + 0.065 m^2 (stand
+#: top, plus the disc table and the disc-guard top, less the stand top under the disc) = 0.649,
+#: so L = 0.584 / 0.6 = 0.974 m.
+SANDER_LENGTH = 0.974
+#: stand depth D (ours: the milling stand's 0.6 m, a common cabinet depth)
+SANDER_DEPTH = 0.6
 #: stand height (ours: puts the disc table at 0.72 m, a bench-tool working height)
 SANDER_STAND_HEIGHT = 0.6
 
@@ -191,10 +193,9 @@ SANDER_STAND_HEIGHT = 0.6
 @lru_cache(maxsize=None)
 def _sanding_machine_geometry():
     L, D, H = SANDER_LENGTH, SANDER_DEPTH, SANDER_STAND_HEIGHT
-    # stand with an open-front shelf, 5 cm panels, 10 cm plinth, 35 cm high (ours: the
-    # common open shelf of a tool stand; its floor is a hard-to-reach concavity)
+    # closed cabinet stand with a 6 cm x 10 cm toe-kick (ours: as the milling stand)
     stand = _difference(_box([0.0, 0.0, 0.0], [L, D, H]),
-                        [_box([0.05, -0.1, 0.1], [L - 0.05, D - 0.05, 0.45])])
+                        [_box([-0.1, -0.1, -0.1], [L + 0.1, 0.06, 0.1])])
     parts = [
         # belt housing along x at the back, 0.2 m tall, 23 cm deep (ours: a 150 mm belt
         # with its frame), leaving 0.25 m of stand top at the right for the disc
@@ -276,8 +277,8 @@ _NOTES = {
     "test_bench": "MAVAC test bench 2 x 1 x 1 m: four adjacent 0.5 m boxes (plain box, open-top "
                   "pocket, slab overhanging a step, tower split by a 0.1 m slot); upward area "
                   "from Table 2's mean heap count",
-    "sanding_machine": "stand-in belt-and-disc sander on a cabinet stand: open shelf, belt "
-                       "housing, disc with a work table over the stand top",
+    "sanding_machine": "stand-in belt-and-disc sander on a closed cabinet stand: belt housing, "
+                       "disc with a work table over the stand top, toe-kick",
     "milling_machine": "stand-in enclosed CNC mill on a stand: open-front enclosure with table "
                        "(T-slots), column and spindle head inside, coolant tank, pendant",
     "sanding_milling": "MAVAC Table 2's one test of both machines: sander and mill side by side, "
@@ -365,7 +366,7 @@ def dust_heaps(machine: Machine, *, spacing: float = 0.10, seed: int = 0,
     MAVAC (Experimental setup): "green dust heaps are evenly distributed at intervals of 10 cm
     on the surface, including within the concavities". We take every face whose normal is
     within ``arccos(min_normal_z)`` of vertical, concavities included (cavity floors, the
-    sander's shelf, inside the milling enclosure), and Poisson-disk sample it with
+    under the sander's disc table, inside the milling enclosure), and Poisson-disk sample it with
     :func:`mavac.geometry.surface.sample_surface`, so the count is about
     ``area / spacing**2``; the scenes' upward areas are sized so that this count is Table 2's
     (see the module docstring).
