@@ -743,7 +743,7 @@ class DetectionParams:
     and the paper's filters (MAVAC, "Dust detection")."""
 
     # Ours: 320 x 236 px over the camera's 75 x 59 deg (CameraParams): ~4.3 mm/px at the 0.5 m
-    # detection limit, so a 3 cm heap spans ~7 px, and the TinyRenderer (CPU) stays fast.
+    # guard stand-off L_d, so a 3 cm heap spans ~7 px, and the TinyRenderer (CPU) stays fast.
     width: int = 320
     height: int = 236
     # MAVAC: "a simple HSV filter with fine-tuned parameters" (values not given). Ours, OpenCV
@@ -755,18 +755,28 @@ class DetectionParams:
     value_min: int = 40
     # Ours: blobs smaller than this (px) are noise.
     min_blob_px: int = 3
-    # Depth validity, m. Near: Azure Kinect DK WFOV 2x2-binned mode operating range 0.25-2.88 m
-    # (hardware specification; the NFOV mode starts at 0.5 m, which would blank everything
-    # inside the L_d pyramid). Far: MAVAC's reliable detection limit L_d (CameraParams.L_d),
-    # the same cut as the offline FOV pyramid.
+    # Depth validity, m: the sensor's operating range, Azure Kinect DK hardware specification
+    # ("Depth camera supported operating modes"), WFOV 2x2 binned: 0.25-2.88 m (the NFOV modes
+    # start at 0.5 m, which would blank a guard's own target at L_d). MAVAC uses L_d only
+    # offline (FOV pyramid, guard stand-off); online it filters "dust particles that are beyond
+    # the robot's theoretically reachable workspace or are incorrectly identified due to noise",
+    # so there is no cut at L_d here.
     min_depth: float = 0.25
-    max_depth: float = 0.5
+    max_depth: float = 2.88
     # "filters ... remove any dust particles that are beyond the robot's theoretically reachable
     # workspace": UR10 reach 1.3 m from the shoulder (UR10 datasheet) plus the 0.40 m tool tube
     # (mavac.robots.models.TOOL_TUBE_LENGTH).
     reach: float = 1.7
-    # Ours: a node within this of an already vacuumed node is a duplicate (half the heap
-    # spacing), m.
+    # Keep only nodes within this distance of the vacuum tip at the guard, m; None: no such
+    # filter (the paper's text has none). Authors' code: 0.5 (will-44/cleaning,
+    # rubyrhod_ws/src/cleaning/script/online.py, __main__: dust.filter_dust(dust_poses, dist=0.5);
+    # script/dust.py, Dust.filter_dust keeps points whose norm in the vacuum_tcp frame is < dist).
+    max_tip_distance: float | None = None
+    # Ours, off by default: drop a node within duplicate_radius (half the heap spacing, m) of a
+    # node already vacuumed in this trial. Neither the paper nor the authors' code has it, and
+    # in our simulation a vacuumed heap is removed, so a node seen there again is dust the
+    # vacuum missed: the paper lets another guard try it.
+    duplicate: bool = False
     duplicate_radius: float = 0.05
     # Ours, scoring only: a node matches a true heap within this distance, m (half the spacing).
     match_radius: float = 0.05
@@ -783,6 +793,8 @@ class DetectionParams:
         check_positive("min_depth", self.min_depth)
         check_range("max_depth", self.max_depth, self.min_depth, math.inf, lo_open=True)
         check_positive("reach", self.reach)
+        if self.max_tip_distance is not None:
+            check_positive("max_tip_distance", self.max_tip_distance)
         check_nonnegative("duplicate_radius", self.duplicate_radius)
         check_positive("match_radius", self.match_radius)
 

@@ -49,10 +49,38 @@ def test_nothing_green_gives_no_nodes():
 
 def test_filters_drop_bad_depth_out_of_reach_and_duplicates():
     nodes = np.array([[0.3, 0, 0], [np.nan] * 3, [5.0, 0, 0], [0.0, 0.3, 0.0], [0.0, -0.3, 0.0]])
-    depth = np.array([0.4, np.nan, 0.4, 0.45, 0.9])
-    why = filter_nodes(nodes, depth, shoulder=np.zeros(3), vacuumed=np.array([[0.0, 0.32, 0.0]]),
-                       params=DetectionParams())
+    depth = np.array([0.4, np.nan, 0.4, 0.45, 3.5])
+    vacuumed = np.array([[0.0, 0.32, 0.0]])
+    params = DetectionParams(duplicate=True)
+    why = filter_nodes(nodes, depth, shoulder=np.zeros(3), vacuumed=vacuumed, params=params)
     assert why.tolist() == ["", "depth", "reach", "duplicate", "depth"]
+
+
+def test_depth_is_valid_over_the_sensor_range_not_cut_at_L_d():
+    nodes = np.array([[0.3, 0, 0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]])
+    why = filter_nodes(nodes, [1.0, 3.0, 0.2], shoulder=np.zeros(3), vacuumed=np.zeros((0, 3)),
+                       params=DetectionParams())
+    assert why.tolist() == ["", "depth", "depth"]  # 1.0 m kept: beyond L_d = 0.5 m, inside 0.25-2.88 m
+
+
+def test_duplicate_filter_is_off_by_default():
+    assert DetectionParams().duplicate is False
+    why = filter_nodes([[0.0, 0.3, 0.0]], [0.45], shoulder=np.zeros(3), vacuumed=[[0.0, 0.31, 0.0]],
+                       params=DetectionParams())
+    assert why.tolist() == [""]
+
+
+def test_tip_filter_keeps_nodes_strictly_within_the_distance():
+    params = DetectionParams(max_tip_distance=0.5)
+    nodes = np.array([[0.0, 0.0, 0.4], [0.0, 0.0, 0.6], [0.0, 0.0, 0.5]])
+    tip = np.array([0.0, 0.0, 0.0])
+    why = filter_nodes(nodes, [0.9, 0.9, 0.9], shoulder=np.zeros(3), vacuumed=np.zeros((0, 3)), params=params, tip=tip)
+    assert why.tolist() == ["", "tip", "tip"]
+    assert DetectionParams().max_tip_distance is None
+    with pytest.raises(ValueError, match="tip"):
+        filter_nodes(nodes, [0.9] * 3, shoulder=np.zeros(3), vacuumed=np.zeros((0, 3)), params=params)
+    with pytest.raises(ValueError, match="max_tip_distance"):
+        DetectionParams(max_tip_distance=-1.0)
 
 
 def test_dbscan_areas_are_ordered_and_complete():
