@@ -714,6 +714,10 @@ class InspectionParams:
 # ---- MAVAC online execution, Algorithm 1 (read by mavac/cleaning) ----
 
 _APPROACH_READINGS = ("tool", "world")
+_NODE_ORDERS = ("tsp", "path")
+_AREA_ORDERS = ("detection", "tsp")
+_VACUUM_PATTERNS = ("linear", "spiral")
+_SPIRAL_NODES = ("last", "every")
 
 
 @dataclass(frozen=True)
@@ -804,19 +808,34 @@ class ApproachParams:
     """Areas and approach points (MAVAC, "Trajectory generation", eq. 5) and RRT-Connect."""
 
     # Ours: DBSCAN radius of an area, m (1.5 heap spacings links neighbouring heaps), and the
-    # smallest area (1: a lone heap is an area too).
+    # smallest area (1: a lone heap is an area too); the paper gives neither. Authors' code:
+    # eps 0.1 m and 1 neighbour (will-44/cleaning, script/dust.py, Dust.dust_path:
+    # clusterise_dbscan(dust_list, eps=0.1, neighbors=1)); pyclustering does not count the point
+    # itself (script/open3d_tools.py, Open3dTool.clusterise_dbscan), scikit-learn does, so
+    # min_samples 2: a node with no other node within eps is noise.
     cluster_eps: float = 0.15
     cluster_min_samples: int = 1
+    # Order of an area's nodes: "tsp", the shortest closed tour (Algorithm 1, line 4,
+    # detectClusterizeTspDust; closed, because the tool returns to the approach point), or
+    # "path", ours before: nearest neighbour + 2-opt open path from the node nearest the centroid.
+    node_order: str = "tsp"
+    # Order of the areas: "detection" (order of their first node in the image) or "tsp" (closed
+    # tour over the area centroids from the first area). Authors' code: "tsp" over each cluster's
+    # first node (script/dust.py, Dust.dust_path; solver script/robot.py,
+    # Robot.generate_trajectory: fast_tsp). The paper's text does not say what its TSP orders.
+    area_order: str = "detection"
     # eq. 5: the approach point is delta before the node, the tool within +- alpha of the guard's
     # orientation. The paper gives neither value. Ours: delta = 0.10 m (two tool-sphere
-    # diameters), alpha = 15 deg.
+    # diameters), alpha = 15 deg. Authors' code: delta 0.05 m (script/online.py, __main__: the
+    # planning TCP is "vacuum_safe_tcp", "the end of vacuum, and we add 5cm to set up an approche
+    # point"), alpha 0 (the entry pose keeps the guard's TCP orientation exactly).
     delta: float = 0.10
     alpha: float = math.radians(15.0)
     # eq. 5 writes d_z - delta. "tool": delta back along the tool axis (the tool z points into
     # the surface, so this is "above" the node as the tool sees it); "world": delta above the
     # node along world z (d_z - delta literally in world z would be inside the machine).
     approach_reading: str = "tool"
-    # Ours: orientations sampled within +- alpha (the first is the guard's own).
+    # Ours: orientations sampled within +- alpha (the first is the guard's own; 1 with alpha 0).
     n_orientations: int = 8
     # Ours: clearance of approach configurations and RRT-Connect paths to the machine, m.
     collision_margin: float = 0.01
@@ -834,6 +853,10 @@ class ApproachParams:
         check_fields(self)
         check_positive("cluster_eps", self.cluster_eps)
         check_int("cluster_min_samples", self.cluster_min_samples, 1)
+        if self.node_order not in _NODE_ORDERS:
+            raise ValueError(f"node_order must be one of {_NODE_ORDERS}, got {self.node_order!r}")
+        if self.area_order not in _AREA_ORDERS:
+            raise ValueError(f"area_order must be one of {_AREA_ORDERS}, got {self.area_order!r}")
         check_nonnegative("delta", self.delta)
         check_range("alpha", self.alpha, 0.0, math.pi)
         if self.approach_reading not in _APPROACH_READINGS:
