@@ -876,13 +876,27 @@ class VacuumParams:
 
     # MAVAC uses impedance control but gives no gains. Ours: 1000 N/m, so pressing the tool
     # sphere its full 2.5 cm radius into a surface costs 25 N; 30 N m/rad. Damping: ours, near
-    # critical for the tool's apparent mass and stable at the 240 Hz physics step.
+    # critical for the tool's apparent mass and stable at the 240 Hz physics step. Authors'
+    # code: 100 N/m and 20 N m/rad (script/online.py, __main__:
+    # arm.set_compliance([100, 100, 100, 20, 20, 20]), Doosan task compliance control).
     stiffness: float = 1000.0
     rotational_stiffness: float = 30.0
     damping: float = 60.0
     rotational_damping: float = 1.0
-    # Ours: speed of the linear vacuuming moves, m/s.
+    # Ours: speed of the linear vacuuming moves, m/s. Authors' code: 0.02 (rubyrhod_ws/src/
+    # utility/script/utility/doosan.py, Doosan.dsr_go_to_l: move_line velocity 20 mm/s).
     speed: float = 0.10
+    # "linear": MAVAC's text, "a linear movement to directly engage with the dust". "spiral":
+    # authors' code, after the linear move into a node, a spiral of spiral_turns revolutions
+    # out to spiral_radius in spiral_time (script/online.py, __main__:
+    # arm.dsr_spiral(revolution=2, max_radius=10, time=5), max_radius in mm; doosan.py,
+    # Doosan.dsr_spiral: Doosan move_spiral about the Z axis of the base frame), at the last
+    # node of each area only (spiral_nodes "last"; "every": ours, at each node).
+    pattern: str = "linear"
+    spiral_radius: float = 0.010
+    spiral_turns: float = 2.0
+    spiral_time: float = 5.0
+    spiral_nodes: str = "last"
     # Ours: a heap is sucked up when the tool sphere's centre passes within this distance of it,
     # m: the 2.5 cm sphere radius plus 2.5 cm of suction reach.
     suction_radius: float = 0.05
@@ -900,6 +914,13 @@ class VacuumParams:
         check_nonnegative("suction_radius", self.suction_radius)
         check_positive("settle_tol", self.settle_tol)
         check_nonnegative("max_settle_time", self.max_settle_time)
+        if self.pattern not in _VACUUM_PATTERNS:
+            raise ValueError(f"pattern must be one of {_VACUUM_PATTERNS}, got {self.pattern!r}")
+        check_positive("spiral_radius", self.spiral_radius)
+        check_positive("spiral_turns", self.spiral_turns)
+        check_positive("spiral_time", self.spiral_time)
+        if self.spiral_nodes not in _SPIRAL_NODES:
+            raise ValueError(f"spiral_nodes must be one of {_SPIRAL_NODES}, got {self.spiral_nodes!r}")
 
 
 @dataclass(frozen=True)
