@@ -1,0 +1,118 @@
+"""Two readings of MAVAC: the paper's text, and the authors' own implementation.
+
+The MAVAC authors published their ROS code (GitHub ``will-44/cleaning``, under
+``rubyrhod_ws/src/cleaning/``, no licence: we take facts and parameters from it, with a
+citation beside each in :mod:`mavac.params`, and copy no code). Where the text is silent or
+differs, :func:`online_params` and :func:`inspection_params` give either reading; the package
+defaults are the paper's text (or ours where the text gives no value).
+
+======================== ============================== ====================================
+parameter                "paper" (package default)      "authors" (will-44/cleaning)
+======================== ============================== ====================================
+online depth validity    sensor range 0.25-2.88 m       same (no depth cut in the code)
+                         (text: no online cut at L_d)
+reach filter             shoulder reach + tool, 1.7 m   same (ours; the tip filter is stricter)
+tip-distance filter      none (text has none)           < 0.5 m of the vacuum tip
+                                                        (online.py; dust.py, filter_dust)
+duplicate filter         off (in neither)               off
+DBSCAN eps / min_samples 0.15 m / 1 (ours: no value)    0.1 m / 2 (dust.py, dust_path;
+                                                        pyclustering neighbours=1)
+node order in an area    TSP (Algorithm 1, line 4)      TSP (older online.py: every node)
+area order               detection order (text silent)  TSP over areas (dust.py, dust_path)
+approach delta / alpha   0.10 m / 15 deg (ours)         0.05 m / 0 (online.py,
+                                                        vacuum_safe_tcp; exact guard pose)
+vacuum motion            linear moves (text)            linear moves + 2-turn, 10 mm, 5 s
+                                                        spiral at the last node (online.py)
+compliance K (transl.,   1000 N/m, 30 N m/rad (ours)    100 N/m, 20 N m/rad (online.py,
+rot.) / vacuum speed     / 0.10 m/s (ours)              set_compliance) / 0.02 m/s
+                                                        (doosan.py, dsr_go_to_l)
+FOV pyramid half-angles  package default                45 / 35 deg
+depth L_d, guard         package default (L_d along     0.7 m ("A definir", to be defined) /
+stand-off                the normal, text)              0.4 m (offline.py,
+                                                        generate_pcd_guard)
+HPR radius               package default                absolute 10 (class_fov_emulator.py,
+                                                        get_visible_point_pyramid)
+======================== ============================== ====================================
+
+Facts of the authors' code not made options: they solve the TSP with ``fast_tsp.find_tour``
+under a 2 s wall-clock budget (``script/robot.py``, ``Robot.generate_trajectory``; we solve
+deterministically, :func:`mavac.cleaning.clustering.tsp_order`); after an area the tool goes
+back to its first node then 75 mm back along the tool axis (``online.py``,
+``dsr_go_relatif([0, 0, -75, 0, 0, 0])``), where we return to the approach point as the text
+says.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from .params import ApproachParams, CameraParams, DetectionParams, DustParams, OnlineParams, VacuumParams
+
+#: the two readings, paper's text first
+READINGS = ("paper", "authors")
+
+
+def check_reading(reading) -> str:
+    """``reading`` if it is one of :data:`READINGS`; ``ValueError`` (``TypeError`` for a
+    non-string) naming the legal values otherwise."""
+    if not isinstance(reading, str):
+        raise TypeError(f"reading must be a string, one of {READINGS}, got {reading!r}")
+    if reading not in READINGS:
+        raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
+    return reading
+
+
+def _authors_online() -> OnlineParams:
+    """The online parameters of will-44/cleaning (sources in :mod:`mavac.params`)."""
+    return OnlineParams(
+        detection=DetectionParams(max_tip_distance=0.5),
+        approach=ApproachParams(cluster_eps=0.1, cluster_min_samples=2, node_order="tsp", area_order="tsp",
+                                delta=0.05, alpha=0.0, n_orientations=1),
+        vacuum=VacuumParams(stiffness=100.0, rotational_stiffness=20.0, speed=0.02, pattern="spiral",
+                            spiral_radius=0.010, spiral_turns=2.0, spiral_time=5.0, spiral_nodes="last"),
+    )
+
+
+def online_params(reading: str = "paper", *, fast: bool = False) -> OnlineParams:
+    """Online (Algorithm 1) parameters of one reading.
+
+    Parameters
+    ----------
+    reading : {"paper", "authors"}
+        ``"paper"``: the package defaults (the paper's text); ``"authors"``: the authors' code.
+    fast : bool
+        Fast mode (CI): heaps 0.2 m apart instead of 0.1 m, as
+        :func:`mavac.experiments.mavac_online.online_params`; same code paths.
+
+    Returns
+    -------
+    OnlineParams
+    """
+    params = _authors_online() if check_reading(reading) == "authors" else OnlineParams()
+    return replace(params, dust=DustParams(spacing=0.2)) if fast else params
+
+
+def inspection_params(reading: str = "paper"):
+    """Offline (inspection) parameters of one reading.
+
+    ``"paper"`` is :class:`mavac.params.InspectionParams` as it stands. ``"authors"`` changes
+    the camera pyramid to half-angles 45 deg (camera XY plane) and 35 deg (XZ plane) cut at
+    0.7 m, HPR at an absolute radius of 10 (``script/class_fov_emulator.py``,
+    ``FovEmulator.__init__`` and ``get_visible_point_pyramid``, the one ``script/offline.py``,
+    ``Offline.send_next_valid_config`` calls), and guard candidates 0.4 m along the surface
+    normal (``script/offline.py``, ``Offline.generate_pcd_guard``, default ``dist=0.4``).
+
+    Returns
+    -------
+    InspectionParams
+    """
+    from .params import InspectionParams
+
+    if check_reading(reading) == "paper":
+        return InspectionParams()
+    from .params import GuardParams, Visibility  # standoff, Visibility: the offline work of issue 20
+
+    camera = replace(CameraParams(), theta_a=math.radians(45.0), theta_b=math.radians(35.0), L_d=0.7)
+    return replace(InspectionParams(), camera=camera, guard=replace(GuardParams(), standoff=0.4),
+                   visibility=Visibility("hpr", radius=10.0))
