@@ -51,6 +51,8 @@ from .params import ApproachParams, CameraParams, DetectionParams, DustParams, O
 
 #: the two readings, paper's text first
 READINGS = ("paper", "authors")
+#: fast mode's heap spacing, m (as :func:`mavac.experiments.mavac_online.online_params`)
+FAST_SPACING = 0.2
 
 
 def check_reading(reading) -> str:
@@ -82,15 +84,22 @@ def online_params(reading: str = "paper", *, fast: bool = False) -> OnlineParams
     reading : {"paper", "authors"}
         ``"paper"``: the package defaults (the paper's text); ``"authors"``: the authors' code.
     fast : bool
-        Fast mode (CI): heaps 0.2 m apart instead of 0.1 m, as
-        :func:`mavac.experiments.mavac_online.online_params`; same code paths.
+        Fast mode (CI): heaps :data:`FAST_SPACING` apart instead of 0.1 m, as
+        :func:`mavac.experiments.mavac_online.online_params`; same code paths. The authors'
+        DBSCAN radius (0.1 m, the heap spacing at paper scale) is scaled with the spacing:
+        with ``min_samples`` 2 a radius below the spacing would make every node noise.
 
     Returns
     -------
     OnlineParams
     """
     params = _authors_online() if check_reading(reading) == "authors" else OnlineParams()
-    return replace(params, dust=DustParams(spacing=0.2)) if fast else params
+    if not fast:
+        return params
+    if reading == "authors":
+        scale = FAST_SPACING / params.dust.spacing
+        params = replace(params, approach=replace(params.approach, cluster_eps=params.approach.cluster_eps * scale))
+    return replace(params, dust=DustParams(spacing=FAST_SPACING))
 
 
 def inspection_params(reading: str = "paper"):

@@ -70,3 +70,30 @@ def test_authors_offline_reading():
     assert authors.camera.L_d == 0.7 and authors.guard.standoff == 0.4
     assert authors.visibility == mp.Visibility("hpr", radius=10.0)
     assert authors != paper
+
+
+def test_fast_mode_scales_the_authors_dbscan_radius_with_the_heap_spacing():
+    assert online_params("authors", fast=True).approach.cluster_eps == pytest.approx(0.2)
+    assert online_params("paper", fast=True).approach == online_params("paper").approach
+
+
+def test_authors_reading_runs_a_trial_with_tip_filter_and_spiral():
+    """One short pybullet trial (3 poses of a small box): the authors' reading end to end."""
+    import warnings
+
+    import trimesh
+
+    from mavac.cleaning.trial import run_trial
+    from mavac.experiments.mavac_offline import fast_params
+    from mavac.geometry.machines import machine_from_mesh
+    from mavac.inspection.plan import plan_inspection
+
+    machine = machine_from_mesh(trimesh.creation.box(bounds=[[-0.5, -0.3, 0.0], [0.5, 0.3, 0.6]]), name="box")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plan = plan_inspection(machine, params=fast_params())
+    plan = dataclasses.replace(plan, pose_set=plan.pose_set.head(3))
+    r = run_trial(machine, plan, params=online_params("authors", fast=True), seed=3)
+    assert set(r.filtered) == {"depth", "reach", "tip", "duplicate"} and r.filtered["duplicate"] == 0
+    assert r.detected > 0 and r.areas > 0
+    assert r.times.vacuum_s >= 5.0 * r.areas_cleaned  # each vacuumed area ends with a 5 s spiral
