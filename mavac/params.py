@@ -760,7 +760,8 @@ class DetectionParams:
     # Ours: blobs smaller than this (px) are noise.
     min_blob_px: int = 3
     # Depth validity, m: the sensor's operating range, Azure Kinect DK hardware specification
-    # ("Depth camera supported operating modes"), WFOV 2x2 binned: 0.25-2.88 m (the NFOV modes
+    # (learn.microsoft.com/azure/kinect-dk/hardware-specification, "Depth camera supported
+    # operating modes"), WFOV 2x2 binned: 0.25-2.88 m (the NFOV modes
     # start at 0.5 m, which would blank a guard's own target at L_d). MAVAC uses L_d only
     # offline (FOV pyramid, guard stand-off); online it filters "dust particles that are beyond
     # the robot's theoretically reachable workspace or are incorrectly identified due to noise",
@@ -890,8 +891,9 @@ class VacuumParams:
     # authors' code, after the linear move into a node, a spiral of spiral_turns revolutions
     # out to spiral_radius in spiral_time (script/online.py, __main__:
     # arm.dsr_spiral(revolution=2, max_radius=10, time=5), max_radius in mm; doosan.py,
-    # Doosan.dsr_spiral: Doosan move_spiral about the Z axis of the base frame), at the last
-    # node of each area only (spiral_nodes "last"; "every": ours, at each node).
+    # Doosan.dsr_spiral: Doosan move_spiral with taskAxis 2 (Z) and ref 0, the base frame as we
+    # read Doosan's constants), at the last node of each area only (spiral_nodes "last";
+    # "every": ours, at each node).
     pattern: str = "linear"
     spiral_radius: float = 0.010
     spiral_turns: float = 2.0

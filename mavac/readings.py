@@ -6,33 +6,40 @@ citation beside each in :mod:`mavac.params`, and copy no code). Where the text i
 differs, :func:`online_params` and :func:`inspection_params` give either reading; the package
 defaults are the paper's text (or ours where the text gives no value).
 
-======================== ============================== ====================================
-parameter                "paper" (package default)      "authors" (will-44/cleaning)
-======================== ============================== ====================================
-online depth validity    sensor range 0.25-2.88 m       same (no depth cut in the code)
-                         (text: no online cut at L_d)
-reach filter             shoulder reach + tool, 1.7 m   same (ours; the tip filter is stricter)
-tip-distance filter      none (text has none)           < 0.5 m of the vacuum tip
-                                                        (online.py; dust.py, filter_dust)
-duplicate filter         off (in neither)               off
-DBSCAN eps / min_samples 0.15 m / 1 (ours: no value)    0.1 m / 2 (dust.py, dust_path;
-                                                        pyclustering neighbours=1)
-node order in an area    TSP (Algorithm 1, line 4)      TSP (older online.py: every node)
-area order               detection order (text silent)  TSP over areas (dust.py, dust_path)
-approach delta / alpha   0.10 m / 15 deg (ours)         0.05 m / 0 (online.py,
-                                                        vacuum_safe_tcp; exact guard pose)
-vacuum motion            linear moves (text)            linear moves + 2-turn, 10 mm, 5 s
-                                                        spiral at the last node (online.py)
-compliance K (transl.,   1000 N/m, 30 N m/rad (ours)    100 N/m, 20 N m/rad (online.py,
-rot.) / vacuum speed     / 0.10 m/s (ours)              set_compliance) / 0.02 m/s
-                                                        (doosan.py, dsr_go_to_l)
-FOV pyramid half-angles  package default                45 / 35 deg
-depth L_d, guard         package default (L_d along     0.7 m ("A definir", to be defined) /
-stand-off                the normal, text)              0.4 m (offline.py,
-                                                        generate_pcd_guard)
-HPR radius               package default                absolute 10 (class_fov_emulator.py,
-                                                        get_visible_point_pyramid)
-======================== ============================== ====================================
+=========================== =============================== ===================================
+parameter                   "paper" (package default)       "authors" (will-44/cleaning)
+=========================== =============================== ===================================
+online depth validity       sensor range 0.25-2.88 m; the   same (the code has no depth cut)
+                            text has no online cut at L_d
+reach filter                shoulder reach + tool, 1.7 m    same (ours; the tip filter is
+                                                            stricter)
+tip-distance filter         none (the text has none)        < 0.5 m from the vacuum tip
+                                                            (online.py; dust.py, filter_dust)
+duplicate filter            off (in neither)                off
+DBSCAN eps, min_samples     0.15 m, 1 (ours: no value)      0.1 m, 2 (dust.py, dust_path;
+                                                            pyclustering neighbours=1)
+node order in an area       TSP (Algorithm 1, line 4)       TSP (older online.py: all nodes)
+area order                  detection (text silent)         TSP (dust.py, dust_path)
+approach delta, alpha       0.10 m, 15 deg (ours)           0.05 m, 0 (online.py:
+                                                            vacuum_safe_tcp, exact guard pose)
+vacuum motion               linear moves (text)             linear + spiral, 2 turns, 10 mm,
+                                                            5 s at the last node (online.py)
+impedance stiffness         1000 N/m, 30 N m/rad (ours)     100 N/m, 20 N m/rad (online.py,
+                                                            set_compliance)
+vacuum speed                0.10 m/s (ours)                 0.02 m/s (doosan.py, dsr_go_to_l)
+FOV half-angles, depth      package default (text: L_d)     45 deg, 35 deg, 0.7 m "A definir"
+                                                            (class_fov_emulator.py)
+guard stand-off             L_d along the normal (text)     0.4 m (offline.py,
+                                                            generate_pcd_guard)
+HPR radius                  package default                 absolute 10
+                                                            (get_visible_point_pyramid)
+=========================== =============================== ===================================
+
+Files read (will-44/cleaning, stored versions): ``script/online.py`` at bc1a1a1 (the last
+version, JSON offline trajectory; d604abf is the older one that TSPs every node and pushes
+30 mm along the tool axis without compliance), ``script/dust.py``, ``script/offline.py`` and
+``script/class_fov_emulator.py`` at 1d03546, ``script/open3d_tools.py`` at 1439c0c,
+``script/robot.py`` and ``rubyrhod_ws/src/utility/script/utility/doosan.py`` at 4a4038c.
 
 Facts of the authors' code not made options: they solve the TSP with ``fast_tsp.find_tour``
 under a 2 s wall-clock budget (``script/robot.py``, ``Robot.generate_trajectory``; we solve
