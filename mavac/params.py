@@ -761,11 +761,10 @@ class DetectionParams:
     min_blob_px: int = 3
     # Depth validity, m: the sensor's operating range, Azure Kinect DK hardware specification
     # (learn.microsoft.com/azure/kinect-dk/hardware-specification, "Depth camera supported
-    # operating modes"), WFOV 2x2 binned: 0.25-2.88 m (the NFOV modes
-    # start at 0.5 m, which would blank a guard's own target at L_d). MAVAC uses L_d only
-    # offline (FOV pyramid, guard stand-off); online it filters "dust particles that are beyond
-    # the robot's theoretically reachable workspace or are incorrectly identified due to noise",
-    # so there is no cut at L_d here.
+    # operating modes"), WFOV 2x2 binned: 0.25-2.88 m (the NFOV modes start at 0.5 m, which
+    # would blank a guard's own target at L_d). MAVAC uses L_d only offline (FOV pyramid, guard
+    # stand-off); online it filters "dust particles that are beyond the robot's theoretically
+    # reachable workspace or are incorrectly identified due to noise": no cut at L_d here.
     min_depth: float = 0.25
     max_depth: float = 2.88
     # "filters ... remove any dust particles that are beyond the robot's theoretically reachable

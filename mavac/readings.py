@@ -18,7 +18,9 @@ tip-distance filter         none (the text has none)        < 0.5 m from the vac
 duplicate filter            off (in neither)                off
 DBSCAN eps, min_samples     0.15 m, 1 (ours: no value)      0.1 m, 2 (dust.py, dust_path;
                                                             pyclustering neighbours=1)
-node order in an area       TSP (Algorithm 1, line 4)       TSP (older online.py: all nodes)
+node order in an area       TSP (Algorithm 1, line 4)       TSP (older online.py TSPs all
+                                                            nodes; the last keeps DBSCAN's
+                                                            expansion order)
 area order                  detection (text silent)         TSP (dust.py, dust_path)
 approach delta, alpha       0.10 m, 15 deg (ours)           0.05 m, 0 (online.py:
                                                             vacuum_safe_tcp, exact guard pose)

@@ -41,7 +41,7 @@ class VacuumLog:
     Attributes
     ----------
     peak_forces : list of float, N
-        Largest machine contact normal force of each linear move.
+        Largest machine contact normal force of each move (linear or spiral).
     sucked : list of int
         Heaps removed, in order.
     seconds : float
