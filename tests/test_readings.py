@@ -8,7 +8,7 @@ import pytest
 
 import mavac.params as mp
 from mavac.params import OnlineParams
-from mavac.readings import READINGS, check_reading, inspection_params, online_params
+from mavac.cleaning.readings import READINGS, check_reading, inspection_params, online_params
 
 
 def test_readings_are_spelled_once():

@@ -13,5 +13,6 @@ One module per concept:
 * :mod:`~mavac.cleaning.scene` -- the simulated cell;
 * :mod:`~mavac.cleaning.timing` -- base travel and the simulated time per activity;
 * :mod:`~mavac.cleaning.misses` -- why each uncleaned heap was missed;
+* :mod:`~mavac.cleaning.readings` -- the paper's text and the authors' code as two readings;
 * :mod:`~mavac.cleaning.trial` -- ``run_trial``: the whole loop, scored.
 """

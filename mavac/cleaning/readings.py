@@ -56,7 +56,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from .params import ApproachParams, CameraParams, DetectionParams, DustParams, OnlineParams, VacuumParams
+from ..params import ApproachParams, CameraParams, DetectionParams, DustParams, OnlineParams, VacuumParams
 
 #: the two readings, paper's text first
 READINGS = ("paper", "authors")
@@ -125,11 +125,11 @@ def inspection_params(reading: str = "paper"):
     -------
     InspectionParams
     """
-    from .params import InspectionParams
+    from ..params import InspectionParams
 
     if check_reading(reading) == "paper":
         return InspectionParams()
-    from .params import GuardParams, Visibility  # standoff, Visibility: the offline work of issue 20
+    from ..params import GuardParams, Visibility  # standoff, Visibility: the offline work of issue 20
 
     camera = replace(CameraParams(), theta_a=math.radians(45.0), theta_b=math.radians(35.0), L_d=0.7)
     return replace(InspectionParams(), camera=camera, guard=replace(GuardParams(), standoff=0.4),
