@@ -714,6 +714,10 @@ class InspectionParams:
 # ---- MAVAC online execution, Algorithm 1 (read by mavac/cleaning) ----
 
 _APPROACH_READINGS = ("tool", "world")
+_NODE_ORDERS = ("tsp", "path")
+_AREA_ORDERS = ("detection", "tsp")
+_VACUUM_PATTERNS = ("linear", "spiral")
+_SPIRAL_NODES = ("last", "every")
 
 
 @dataclass(frozen=True)
@@ -743,7 +747,7 @@ class DetectionParams:
     and the paper's filters (MAVAC, "Dust detection")."""
 
     # Ours: 320 x 236 px over the camera's 75 x 59 deg (CameraParams): ~4.3 mm/px at the 0.5 m
-    # detection limit, so a 3 cm heap spans ~7 px, and the TinyRenderer (CPU) stays fast.
+    # guard stand-off L_d, so a 3 cm heap spans ~7 px, and the TinyRenderer (CPU) stays fast.
     width: int = 320
     height: int = 236
     # MAVAC: "a simple HSV filter with fine-tuned parameters" (values not given). Ours, OpenCV
@@ -755,18 +759,28 @@ class DetectionParams:
     value_min: int = 40
     # Ours: blobs smaller than this (px) are noise.
     min_blob_px: int = 3
-    # Depth validity, m. Near: Azure Kinect DK WFOV 2x2-binned mode operating range 0.25-2.88 m
-    # (hardware specification; the NFOV mode starts at 0.5 m, which would blank everything
-    # inside the L_d pyramid). Far: MAVAC's reliable detection limit L_d (CameraParams.L_d),
-    # the same cut as the offline FOV pyramid.
+    # Depth validity, m: the sensor's operating range, Azure Kinect DK hardware specification
+    # (learn.microsoft.com/azure/kinect-dk/hardware-specification, "Depth camera supported
+    # operating modes"), WFOV 2x2 binned: 0.25-2.88 m (the NFOV modes start at 0.5 m, which
+    # would blank a guard's own target at L_d). MAVAC uses L_d only offline (FOV pyramid, guard
+    # stand-off); online it filters "dust particles that are beyond the robot's theoretically
+    # reachable workspace or are incorrectly identified due to noise": no cut at L_d here.
     min_depth: float = 0.25
-    max_depth: float = 0.5
+    max_depth: float = 2.88
     # "filters ... remove any dust particles that are beyond the robot's theoretically reachable
     # workspace": UR10 reach 1.3 m from the shoulder (UR10 datasheet) plus the 0.40 m tool tube
     # (mavac.robots.models.TOOL_TUBE_LENGTH).
     reach: float = 1.7
-    # Ours: a node within this of an already vacuumed node is a duplicate (half the heap
-    # spacing), m.
+    # Keep only nodes within this distance of the vacuum tip at the guard, m; None: no such
+    # filter (the paper's text has none). Authors' code: 0.5 (will-44/cleaning,
+    # rubyrhod_ws/src/cleaning/script/online.py, __main__: dust.filter_dust(dust_poses, dist=0.5);
+    # script/dust.py, Dust.filter_dust keeps points whose norm in the vacuum_tcp frame is < dist).
+    max_tip_distance: float | None = None
+    # Ours, off by default: drop a node within duplicate_radius (half the heap spacing, m) of a
+    # node already vacuumed in this trial. Neither the paper nor the authors' code has it, and
+    # in our simulation a vacuumed heap is removed, so a node seen there again is dust the
+    # vacuum missed: the paper lets another guard try it.
+    duplicate: bool = False
     duplicate_radius: float = 0.05
     # Ours, scoring only: a node matches a true heap within this distance, m (half the spacing).
     match_radius: float = 0.05
@@ -783,6 +797,8 @@ class DetectionParams:
         check_positive("min_depth", self.min_depth)
         check_range("max_depth", self.max_depth, self.min_depth, math.inf, lo_open=True)
         check_positive("reach", self.reach)
+        if self.max_tip_distance is not None:
+            check_positive("max_tip_distance", self.max_tip_distance)
         check_nonnegative("duplicate_radius", self.duplicate_radius)
         check_positive("match_radius", self.match_radius)
 
@@ -792,19 +808,34 @@ class ApproachParams:
     """Areas and approach points (MAVAC, "Trajectory generation", eq. 5) and RRT-Connect."""
 
     # Ours: DBSCAN radius of an area, m (1.5 heap spacings links neighbouring heaps), and the
-    # smallest area (1: a lone heap is an area too).
+    # smallest area (1: a lone heap is an area too); the paper gives neither. Authors' code:
+    # eps 0.1 m and 1 neighbour (will-44/cleaning, script/dust.py, Dust.dust_path:
+    # clusterise_dbscan(dust_list, eps=0.1, neighbors=1)); pyclustering does not count the point
+    # itself (script/open3d_tools.py, Open3dTool.clusterise_dbscan), scikit-learn does, so
+    # min_samples 2: a node with no other node within eps is noise.
     cluster_eps: float = 0.15
     cluster_min_samples: int = 1
+    # Order of an area's nodes: "tsp", the shortest closed tour (Algorithm 1, line 4,
+    # detectClusterizeTspDust; closed, because the tool returns to the approach point), or
+    # "path", ours before: nearest neighbour + 2-opt open path from the node nearest the centroid.
+    node_order: str = "tsp"
+    # Order of the areas: "detection" (order of their first node in the image) or "tsp" (closed
+    # tour over the area centroids from the first area). Authors' code: "tsp" over each cluster's
+    # first node (script/dust.py, Dust.dust_path; solver script/robot.py,
+    # Robot.generate_trajectory: fast_tsp). The paper's text does not say what its TSP orders.
+    area_order: str = "detection"
     # eq. 5: the approach point is delta before the node, the tool within +- alpha of the guard's
     # orientation. The paper gives neither value. Ours: delta = 0.10 m (two tool-sphere
-    # diameters), alpha = 15 deg.
+    # diameters), alpha = 15 deg. Authors' code: delta 0.05 m (script/online.py, __main__: the
+    # planning TCP is "vacuum_safe_tcp", "the end of vacuum, and we add 5cm to set up an approche
+    # point"), alpha 0 (the entry pose keeps the guard's TCP orientation exactly).
     delta: float = 0.10
     alpha: float = math.radians(15.0)
     # eq. 5 writes d_z - delta. "tool": delta back along the tool axis (the tool z points into
     # the surface, so this is "above" the node as the tool sees it); "world": delta above the
     # node along world z (d_z - delta literally in world z would be inside the machine).
     approach_reading: str = "tool"
-    # Ours: orientations sampled within +- alpha (the first is the guard's own).
+    # Ours: orientations sampled within +- alpha (the first is the guard's own; 1 with alpha 0).
     n_orientations: int = 8
     # Ours: clearance of approach configurations and RRT-Connect paths to the machine, m.
     collision_margin: float = 0.01
@@ -822,6 +853,10 @@ class ApproachParams:
         check_fields(self)
         check_positive("cluster_eps", self.cluster_eps)
         check_int("cluster_min_samples", self.cluster_min_samples, 1)
+        if self.node_order not in _NODE_ORDERS:
+            raise ValueError(f"node_order must be one of {_NODE_ORDERS}, got {self.node_order!r}")
+        if self.area_order not in _AREA_ORDERS:
+            raise ValueError(f"area_order must be one of {_AREA_ORDERS}, got {self.area_order!r}")
         check_nonnegative("delta", self.delta)
         check_range("alpha", self.alpha, 0.0, math.pi)
         if self.approach_reading not in _APPROACH_READINGS:
@@ -841,13 +876,28 @@ class VacuumParams:
 
     # MAVAC uses impedance control but gives no gains. Ours: 1000 N/m, so pressing the tool
     # sphere its full 2.5 cm radius into a surface costs 25 N; 30 N m/rad. Damping: ours, near
-    # critical for the tool's apparent mass and stable at the 240 Hz physics step.
+    # critical for the tool's apparent mass and stable at the 240 Hz physics step. Authors'
+    # code: 100 N/m and 20 N m/rad (script/online.py, __main__:
+    # arm.set_compliance([100, 100, 100, 20, 20, 20]), Doosan task compliance control).
     stiffness: float = 1000.0
     rotational_stiffness: float = 30.0
     damping: float = 60.0
     rotational_damping: float = 1.0
-    # Ours: speed of the linear vacuuming moves, m/s.
+    # Ours: speed of the linear vacuuming moves, m/s. Authors' code: 0.02 (rubyrhod_ws/src/
+    # utility/script/utility/doosan.py, Doosan.dsr_go_to_l: move_line velocity 20 mm/s).
     speed: float = 0.10
+    # "linear": MAVAC's text, "a linear movement to directly engage with the dust". "spiral":
+    # authors' code, after the linear move into a node, a spiral of spiral_turns revolutions
+    # out to spiral_radius in spiral_time (script/online.py, __main__:
+    # arm.dsr_spiral(revolution=2, max_radius=10, time=5), max_radius in mm; doosan.py,
+    # Doosan.dsr_spiral: Doosan move_spiral with taskAxis 2 (Z) and ref 0, the base frame as we
+    # read Doosan's constants), at the last node of each area only (spiral_nodes "last";
+    # "every": ours, at each node).
+    pattern: str = "linear"
+    spiral_radius: float = 0.010
+    spiral_turns: float = 2.0
+    spiral_time: float = 5.0
+    spiral_nodes: str = "last"
     # Ours: a heap is sucked up when the tool sphere's centre passes within this distance of it,
     # m: the 2.5 cm sphere radius plus 2.5 cm of suction reach.
     suction_radius: float = 0.05
@@ -865,6 +915,13 @@ class VacuumParams:
         check_nonnegative("suction_radius", self.suction_radius)
         check_positive("settle_tol", self.settle_tol)
         check_nonnegative("max_settle_time", self.max_settle_time)
+        if self.pattern not in _VACUUM_PATTERNS:
+            raise ValueError(f"pattern must be one of {_VACUUM_PATTERNS}, got {self.pattern!r}")
+        check_positive("spiral_radius", self.spiral_radius)
+        check_positive("spiral_turns", self.spiral_turns)
+        check_positive("spiral_time", self.spiral_time)
+        if self.spiral_nodes not in _SPIRAL_NODES:
+            raise ValueError(f"spiral_nodes must be one of {_SPIRAL_NODES}, got {self.spiral_nodes!r}")
 
 
 @dataclass(frozen=True)

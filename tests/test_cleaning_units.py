@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 from mavac.cleaning.approach import approach_orientations, approach_poses
-from mavac.cleaning.clustering import areas_from_nodes
+from mavac.cleaning.clustering import areas_from_nodes, tsp_order
 from mavac.cleaning.detection import detect_dust, dust_mask, match_nodes
 from mavac.cleaning.filters import filter_nodes
 from mavac.cleaning.misses import HeapEvents, cause_counts, in_frustum, miss_causes
 from mavac.cleaning.timing import TrialTimes, base_path_length
+from mavac.cleaning.vacuum import spiral_path
 from mavac.params import ApproachParams, DetectionParams, DustParams, OnlineParams, VacuumParams
 from mavac.sim.camera import intrinsics_from_fov
 
@@ -49,10 +50,38 @@ def test_nothing_green_gives_no_nodes():
 
 def test_filters_drop_bad_depth_out_of_reach_and_duplicates():
     nodes = np.array([[0.3, 0, 0], [np.nan] * 3, [5.0, 0, 0], [0.0, 0.3, 0.0], [0.0, -0.3, 0.0]])
-    depth = np.array([0.4, np.nan, 0.4, 0.45, 0.9])
-    why = filter_nodes(nodes, depth, shoulder=np.zeros(3), vacuumed=np.array([[0.0, 0.32, 0.0]]),
-                       params=DetectionParams())
+    depth = np.array([0.4, np.nan, 0.4, 0.45, 3.5])
+    vacuumed = np.array([[0.0, 0.32, 0.0]])
+    params = DetectionParams(duplicate=True)
+    why = filter_nodes(nodes, depth, shoulder=np.zeros(3), vacuumed=vacuumed, params=params)
     assert why.tolist() == ["", "depth", "reach", "duplicate", "depth"]
+
+
+def test_depth_is_valid_over_the_sensor_range_not_cut_at_L_d():
+    nodes = np.array([[0.3, 0, 0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]])
+    why = filter_nodes(nodes, [1.0, 3.0, 0.2], shoulder=np.zeros(3), vacuumed=np.zeros((0, 3)),
+                       params=DetectionParams())
+    assert why.tolist() == ["", "depth", "depth"]  # 1.0 m kept: beyond L_d = 0.5 m, inside 0.25-2.88 m
+
+
+def test_duplicate_filter_is_off_by_default():
+    assert DetectionParams().duplicate is False
+    why = filter_nodes([[0.0, 0.3, 0.0]], [0.45], shoulder=np.zeros(3), vacuumed=[[0.0, 0.31, 0.0]],
+                       params=DetectionParams())
+    assert why.tolist() == [""]
+
+
+def test_tip_filter_keeps_nodes_strictly_within_the_distance():
+    params = DetectionParams(max_tip_distance=0.5)
+    nodes = np.array([[0.0, 0.0, 0.4], [0.0, 0.0, 0.6], [0.0, 0.0, 0.5]])
+    tip = np.array([0.0, 0.0, 0.0])
+    why = filter_nodes(nodes, [0.9, 0.9, 0.9], shoulder=np.zeros(3), vacuumed=np.zeros((0, 3)), params=params, tip=tip)
+    assert why.tolist() == ["", "tip", "tip"]
+    assert DetectionParams().max_tip_distance is None
+    with pytest.raises(ValueError, match="tip"):
+        filter_nodes(nodes, [0.9] * 3, shoulder=np.zeros(3), vacuumed=np.zeros((0, 3)), params=params)
+    with pytest.raises(ValueError, match="max_tip_distance"):
+        DetectionParams(max_tip_distance=-1.0)
 
 
 def test_dbscan_areas_are_ordered_and_complete():
@@ -119,3 +148,73 @@ def test_approach_reading_must_be_known():
     with pytest.raises(ValueError, match="approach_reading"):
         ApproachParams(approach_reading="sideways")
     assert dataclasses.replace(OnlineParams(), base_speed=0.5).base_speed == 0.5
+
+
+def _tour_length(P, order):
+    return float(np.linalg.norm(P[order] - P[np.roll(order, -1)], axis=1).sum())
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_tsp_order_is_optimal_against_brute_force_and_deterministic(seed):
+    import itertools
+
+    P = np.random.default_rng(seed).uniform(0.0, 0.5, size=(8, 3))
+    order = tsp_order(P)
+    assert order[0] == 0 and sorted(order.tolist()) == list(range(8))
+    best = min(_tour_length(P, np.array((0,) + p)) for p in itertools.permutations(range(1, 8)))
+    assert _tour_length(P, order) <= best + 8 * 1e-4  # 0.1 mm rounding per edge
+    np.testing.assert_array_equal(tsp_order(P), order)
+
+
+def test_tsp_order_of_a_large_set_is_a_deterministic_tour():
+    P = np.random.default_rng(3).uniform(0.0, 1.0, size=(30, 3))
+    order = tsp_order(P)
+    assert order[0] == 0 and sorted(order.tolist()) == list(range(30))
+    np.testing.assert_array_equal(tsp_order(P), order)
+    assert _tour_length(P, order) < _tour_length(P, np.arange(30))
+
+
+def test_areas_in_tsp_order_and_node_orders():
+    # a ring of 6 nodes given out of order: the tour goes round the ring
+    angles = np.array([0, 3, 1, 4, 2, 5]) * np.pi / 3
+    ring = 0.1 * np.c_[np.cos(angles), np.sin(angles), np.zeros(6)]
+    (area,) = areas_from_nodes(ring, eps=0.15, node_order="tsp")
+    steps = np.diff(np.r_[angles[area], angles[area][0]])
+    assert np.allclose(np.abs(np.angle(np.exp(1j * steps))), np.pi / 3)
+    assert sorted(areas_from_nodes(ring, eps=0.15, node_order="path")[0].tolist()) == list(range(6))
+    far = np.array([[0, 0, 0], [3, 0, 0], [1, 0, 0], [2, 0, 0]], dtype=float)
+    assert [a.tolist() for a in areas_from_nodes(far, eps=0.1, area_order="tsp")] in ([[0], [2], [3], [1]],
+                                                                                   [[0], [1], [3], [2]])
+    with pytest.raises(ValueError, match="node_order"):
+        areas_from_nodes(far, eps=0.1, node_order="random")
+
+
+def test_dbscan_min_samples_two_drops_lone_nodes_as_noise():
+    nodes = np.array([[0, 0, 0], [0.05, 0, 0], [1.0, 0, 0]], dtype=float)
+    assert [sorted(a.tolist()) for a in areas_from_nodes(nodes, eps=0.1, min_samples=2)] == [[0, 1]]
+
+
+def test_spiral_path_geometry():
+    center = np.array([0.3, -0.2, 0.8])
+    path = spiral_path(center, radius=0.01, turns=2.0, n=801)
+    np.testing.assert_allclose(path[0], center)
+    r = np.linalg.norm(path - center, axis=1)
+    assert r.max() == pytest.approx(0.01) and r[-1] == pytest.approx(0.01)
+    assert np.all(np.diff(r) >= 0)  # Archimedean: radius grows with the angle
+    np.testing.assert_allclose(path[:, 2], center[2])  # in the plane normal to world z
+    phi = np.unwrap(np.arctan2(path[1:, 1] - center[1], path[1:, 0] - center[0]))
+    assert abs(phi[-1] - phi[0]) == pytest.approx(2 * 2 * np.pi, abs=0.05)
+    np.testing.assert_allclose(r[400], 0.005, atol=1e-12)  # half way in angle, half the radius
+    tilted = spiral_path(center, radius=0.02, turns=1.0, n=50, axis=(1.0, 0, 0))
+    np.testing.assert_allclose(tilted[:, 0], center[0])
+    with pytest.raises(ValueError, match="radius"):
+        spiral_path(center, radius=0.0, turns=1.0, n=10)
+
+
+def test_vacuum_pattern_and_orders_are_checked_by_name():
+    with pytest.raises(ValueError, match="pattern"):
+        VacuumParams(pattern="zigzag")
+    with pytest.raises(ValueError, match="spiral_nodes"):
+        VacuumParams(spiral_nodes="first")
+    with pytest.raises(ValueError, match="area_order"):
+        ApproachParams(area_order="random")

@@ -195,14 +195,15 @@ class _Run:
         self.result.true_positives += int(np.count_nonzero(heap_of[located] >= 0))
         self.matched[heap_of[heap_of >= 0]] = True
         shoulder = self.cell.sim.world_T_link(SHOULDER_LINK)[:3, 3]
+        world_T_guard_tool = self.cell.world_T_tool()
         why = filter_nodes(det.nodes, det.depth, shoulder=shoulder, vacuumed=self.vacuumed,
-                           params=self.params.detection)
+                           params=self.params.detection, tip=world_T_guard_tool[:3, 3])
         for name in FILTERS:
             self.result.filtered[name] += int(np.count_nonzero(why == name))
         kept = np.flatnonzero(why == "")
-        world_T_guard_tool = self.cell.world_T_tool()
-        for area in areas_from_nodes(det.nodes[kept], eps=self.params.approach.cluster_eps,
-                                     min_samples=self.params.approach.cluster_min_samples):
+        a = self.params.approach
+        for area in areas_from_nodes(det.nodes[kept], eps=a.cluster_eps, min_samples=a.cluster_min_samples,
+                                     node_order=a.node_order, area_order=a.area_order):
             self.clean_area(det.nodes[kept][area], heap_of[kept][area], world_T_guard_tool)
 
     def clean_area(self, nodes, heaps, world_T_guard_tool) -> None:

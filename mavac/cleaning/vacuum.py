@@ -10,6 +10,13 @@ where ``x_d`` slides along the segment at the vacuuming speed. The stiffness let
 press on the machine instead of fighting it; pybullet reports the contact forces, logged with
 the peak per move. While the vacuum runs, every present heap within the suction radius of the
 tool sphere's centre is removed.
+
+The authors' code (will-44/cleaning, ``script/online.py``, ``__main__``) does the same under
+the Doosan's task compliance control: the tip, 5 cm short of the first node along the tool
+axis, is pushed compliantly onto it (a linear move, no force set-point: ``set_force`` is
+commented out), then moved node to node. It then spirals at the area's last node
+(``VacuumParams.pattern = "spiral"``, :func:`spiral_path`), a motion our reading of the paper's
+text ("a linear movement") does not have.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ import numpy as np
 
 from ..params import VacuumParams
 from ..sim.control import impedance_step
+from ..validate import check_int, check_positive
 
 #: Ours: after the ramp, a move has settled when every joint is slower than this (rad/s), e.g.
 #: the sphere resting on the machine short of a node.
@@ -33,7 +41,7 @@ class VacuumLog:
     Attributes
     ----------
     peak_forces : list of float, N
-        Largest machine contact normal force of each linear move.
+        Largest machine contact normal force of each move (linear or spiral).
     sucked : list of int
         Heaps removed, in order.
     seconds : float
@@ -54,21 +62,57 @@ def _gains(params: VacuumParams) -> tuple[np.ndarray, np.ndarray]:
     return K, D
 
 
-def linear_move(cell, world_T_from, world_T_to, params: VacuumParams, log: VacuumLog) -> float:
-    """One impedance move of the tool centre from ``world_T_from`` to ``world_T_to`` (same
-    orientation), then settling; sucks heaps on the way. Returns the closest approach to the
-    target position, m."""
+def spiral_path(center, *, radius: float, turns: float, n: int, axis=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """Archimedean spiral around ``center`` in the plane normal to ``axis``.
+
+    The radius grows linearly with the angle, from 0 at ``center`` to ``radius`` after
+    ``turns`` revolutions (the Doosan ``move_spiral`` of the authors' code, about the base Z
+    axis: world z for our upright base).
+
+    Parameters
+    ----------
+    center : (3,) float, metres
+    radius : float, metres (> 0)
+    turns : float, revolutions (> 0)
+    n : int, >= 2
+        Points, evenly spaced in angle.
+    axis : (3,) float
+        Spiral axis (normalised here).
+
+    Returns
+    -------
+    (n, 3) float, metres
+        ``[0]`` is ``center``, ``[-1]`` lies ``radius`` from it.
+    """
+    check_positive("radius", radius)
+    check_positive("turns", turns)
+    n = check_int("n", n, 2)
+    a = np.asarray(axis, dtype=float).reshape(3)
+    if not np.isfinite(a).all() or np.linalg.norm(a) < 1e-12:
+        raise ValueError(f"axis must be a finite non-zero 3-vector, got {axis!r}")
+    a = a / np.linalg.norm(a)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(a, helper)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    s = np.linspace(0.0, 1.0, n)
+    phi, r = 2.0 * np.pi * turns * s, radius * s
+    offsets = r[:, None] * (np.cos(phi)[:, None] * e1 + np.sin(phi)[:, None] * e2)
+    return np.asarray(center, dtype=float).reshape(3) + offsets
+
+
+def _follow(cell, world_T_ref, waypoints, n_settle: int, params: VacuumParams, log: VacuumLog) -> float:
+    """Impedance-track the tool centre through ``waypoints`` (m, 3), one per physics step, with
+    the orientation of ``world_T_ref``, then hold the last one for up to ``n_settle`` steps;
+    sucks heaps on the way. Returns the closest approach to the last waypoint, m."""
     dt = cell.world.time_step
-    start, goal = world_T_from[:3, 3], world_T_to[:3, 3]
-    n_ramp = max(1, int(np.ceil(np.linalg.norm(goal - start) / params.speed / dt)))
-    n_settle = int(np.ceil(params.max_settle_time / dt))
     K, D = _gains(params)
     base_T_world = np.linalg.inv(cell.world_T_base)
-    target = np.array(world_T_to, dtype=float)
-    peak, closest = 0.0, np.inf
-    for k in range(n_ramp + n_settle):
-        s = min(1.0, (k + 1) / n_ramp)
-        target[:3, 3] = start + s * (goal - start)
+    target = np.array(world_T_ref, dtype=float)
+    goal = waypoints[-1]
+    peak, closest, n_move = 0.0, np.inf, len(waypoints)
+    for k in range(n_move + n_settle):
+        target[:3, 3] = waypoints[min(k, n_move - 1)]
         q, dq = cell.sim.state()
         cell.sim.apply_torques_unchecked(impedance_step(cell.model, cell.data, q, dq, cell.tool_id,
                                                         base_T_world @ target, K, D))
@@ -78,16 +122,41 @@ def linear_move(cell, world_T_from, world_T_to, params: VacuumParams, log: Vacuu
         peak = max(peak, cell.world.contact_forces(cell.sim.body, cell.machine_body).normal_force)
         gap = float(np.linalg.norm(tip - goal))
         closest = min(closest, gap)
-        if k >= n_ramp and (gap <= params.settle_tol or np.abs(dq).max() < SETTLED_JOINT_SPEED):
+        if k >= n_move and (gap <= params.settle_tol or np.abs(dq).max() < SETTLED_JOINT_SPEED):
             break
     log.peak_forces.append(peak)
     log.seconds += (k + 1) * dt
     return closest
 
 
+def linear_move(cell, world_T_from, world_T_to, params: VacuumParams, log: VacuumLog) -> float:
+    """One impedance move of the tool centre from ``world_T_from`` to ``world_T_to`` (same
+    orientation) at ``params.speed``, then settling; sucks heaps on the way. Returns the
+    closest approach to the target position, m."""
+    dt = cell.world.time_step
+    start, goal = world_T_from[:3, 3], world_T_to[:3, 3]
+    n_ramp = max(1, int(np.ceil(np.linalg.norm(goal - start) / params.speed / dt)))
+    s = np.arange(1, n_ramp + 1) / n_ramp
+    waypoints = start + s[:, None] * (goal - start)
+    return _follow(cell, world_T_to, waypoints, int(np.ceil(params.max_settle_time / dt)), params, log)
+
+
+def spiral_move(cell, world_T_node, params: VacuumParams, log: VacuumLog) -> np.ndarray:
+    """The authors' spiral around the node of ``world_T_node`` (:func:`spiral_path`, over
+    ``params.spiral_time`` s) under impedance; returns the tool pose commanded at its end."""
+    dt = cell.world.time_step
+    n = max(2, int(np.ceil(params.spiral_time / dt)))
+    waypoints = spiral_path(world_T_node[:3, 3], radius=params.spiral_radius, turns=params.spiral_turns, n=n)
+    _follow(cell, world_T_node, waypoints, int(np.ceil(params.max_settle_time / dt)), params, log)
+    end = np.array(world_T_node, dtype=float)
+    end[:3, 3] = waypoints[-1]
+    return end
+
+
 def vacuum_area(cell, world_T_approach, nodes, params: VacuumParams) -> VacuumLog:
     """Algorithm 1, lines 9-14: impedance moves into every node of an area, then back to the
-    approach point.
+    approach point; with ``params.pattern == "spiral"``, a spiral at the last node (or at
+    every node, ``spiral_nodes="every"``).
 
     Parameters
     ----------
@@ -106,10 +175,13 @@ def vacuum_area(cell, world_T_approach, nodes, params: VacuumParams) -> VacuumLo
     log = VacuumLog()
     cell.sim.enable_torque_control()
     current = np.array(world_T_approach, dtype=float)
-    for node in np.asarray(nodes, dtype=float).reshape(-1, 3):
+    N = np.asarray(nodes, dtype=float).reshape(-1, 3)
+    for i, node in enumerate(N):
         target = current.copy()
         target[:3, 3] = node
         log.reached.append(linear_move(cell, current, target, params, log))
         current = target
+        if params.pattern == "spiral" and (params.spiral_nodes == "every" or i == len(N) - 1):
+            current = spiral_move(cell, target, params, log)
     linear_move(cell, current, world_T_approach, params, log)
     return log
