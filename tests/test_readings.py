@@ -97,3 +97,14 @@ def test_authors_reading_runs_a_trial_with_tip_filter_and_spiral():
     assert set(r.filtered) == {"depth", "reach", "tip", "duplicate"} and r.filtered["duplicate"] == 0
     assert r.detected > 0 and r.areas > 0
     assert r.times.vacuum_s >= 5.0 * r.areas_cleaned  # each vacuumed area ends with a 5 s spiral
+
+
+def test_differences_lists_exactly_the_fields_that_differ():
+    from mavac.cleaning.readings import differences
+
+    table = differences()
+    online = table[table.stage == "online"].set_index("parameter")
+    assert online.loc["approach.delta", "authors"] == 0.05 and online.loc["approach.delta", "paper"] == 0.10
+    assert "time_step" not in online.index  # equal in both readings: not listed
+    offline = table[table.stage == "offline"].set_index("parameter")
+    assert offline.loc["guard.standoff", "authors"] == 0.4

@@ -134,3 +134,37 @@ def inspection_params(reading: str = "paper"):
     camera = replace(CameraParams(), theta_a=math.radians(45.0), theta_b=math.radians(35.0), L_d=0.7)
     return replace(InspectionParams(), camera=camera, guard=replace(GuardParams(), standoff=0.4),
                    visibility=Visibility("hpr", radius=10.0))
+
+
+def _flat_fields(params, prefix: str = "") -> dict:
+    """``{"approach.delta": 0.1, ...}``: every leaf field of a nested parameter dataclass."""
+    from dataclasses import fields, is_dataclass
+
+    out = {}
+    for f in fields(params):
+        value = getattr(params, f.name)
+        if is_dataclass(value):
+            out |= _flat_fields(value, f"{prefix}{f.name}.")
+        else:
+            out[f"{prefix}{f.name}"] = value
+    return out
+
+
+def differences(*, fast: bool = False):
+    """Every parameter where the two readings differ, read from the parameter objects.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``stage`` ("offline" or "online"), ``parameter`` (dotted field path) and one
+        column per reading.
+    """
+    import pandas as pd
+
+    rows = []
+    for stage, make in (("offline", lambda r: inspection_params(r)), ("online", lambda r: online_params(r, fast=fast))):
+        values = {r: _flat_fields(make(r)) for r in READINGS}
+        for name, value in values[READINGS[0]].items():
+            if any(values[r][name] != value for r in READINGS[1:]):
+                rows.append(dict(stage=stage, parameter=name) | {r: values[r][name] for r in READINGS})
+    return pd.DataFrame(rows, columns=["stage", "parameter", *READINGS])

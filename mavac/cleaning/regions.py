@@ -24,6 +24,8 @@ from ..validate import check_instance, check_points, check_positive
 OPEN = "open"
 #: label of a heap with machine material above it
 ENCLOSED = "enclosed"
+#: every label, in report order
+REGIONS = (OPEN, ENCLOSED)
 #: height (m) above the heap where the upward ray starts: clears the face the heap lies on
 #: (1 mm, far above float error, far below any gap of the machines)
 RAY_LIFT = 1e-3
