@@ -2,7 +2,6 @@
 and a headless-Chromium screenshot that is not blank."""
 
 import base64
-import dataclasses
 import re
 import warnings
 
