@@ -947,6 +947,11 @@ class OnlineParams:
 
 
 
+#: Gradient-descent variants of candidate sampling, Kabir Table I names ("a" spells alpha);
+#: "none" is sampling without gradient descent (read by mavac.setups.sampling).
+SAMPLING_VARIANTS = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_XYa")
+
+
 @dataclass(frozen=True)
 class SetupPlanParams:
     """Everything ``mavac.setups.plan.plan_setups`` needs: setup space, reach test, candidate
@@ -979,9 +984,8 @@ class SetupPlanParams:
         if self.sampling_method not in ("uniform", "hierarchical", "random"):
             raise ValueError(f"sampling_method must be 'uniform', 'hierarchical' or 'random', "
                              f"got {self.sampling_method!r}")
-        variants = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_XYa")
-        if self.variant not in variants:
-            raise ValueError(f"variant must be one of {variants}, got {self.variant!r}")
+        if self.variant not in SAMPLING_VARIANTS:
+            raise ValueError(f"variant must be one of {SAMPLING_VARIANTS}, got {self.variant!r}")
         check_int("seed", self.seed, lo=0)
         check_positive("cleaning_rate", self.cleaning_rate)
         if self.method not in ("milp", "dfbnb", "both"):
