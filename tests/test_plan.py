@@ -242,3 +242,26 @@ def test_accessible_sets_with_other_visibility_from_one_context(ctx):
     hpr = ctx.accessible_with(Visibility("hpr"))
     assert hpr.shape == ctx.accessible.shape and not np.array_equal(hpr, ctx.accessible)
     assert not np.any(hpr & ~ctx.reachable)  # visibility only removes elements from the reachable ones
+
+
+def test_the_authors_offline_settings_run_through_the_pipeline(robot):
+    """The MAVAC authors' ROS code (will-44/cleaning): 45 x 35 deg pyramid 0.7 m deep, guards
+    0.4 m along the normal, HPR at an absolute radius of 10 m. Every guard camera then stands
+    0.4 m from its target, and the plan's coverage is counted with that HPR."""
+    import math
+
+    from mavac.params import CameraParams
+
+    params = dataclasses.replace(
+        FAST, camera=CameraParams(theta_a=math.radians(45), theta_b=math.radians(35), L_d=0.7),
+        guard=dataclasses.replace(FAST.guard, standoff=0.4), visibility=Visibility("hpr", radius=10.0),
+        nos=dataclasses.replace(FAST.nos, enabled=False))
+    assert params.guard_standoff == 0.4
+    authors = plan_inspection(_box_machine(), robot=robot, params=params)
+    guards = np.flatnonzero(authors.pose_kind == "guard")
+    assert len(guards) > 0 and authors.visibility == "hpr"
+    dist = np.linalg.norm(authors.world_T_camera[guards, :3, 3] - authors.points[authors.pose_target[guards]], axis=1)
+    np.testing.assert_allclose(dist, 0.4, atol=1e-3)
+    # the same plan with the radius as a factor of the farthest distance counts other elements
+    factor = plan_inspection(_box_machine(), robot=robot, params=params.with_visibility(Visibility("hpr")))
+    assert not np.array_equal(factor.visible, authors.visible)

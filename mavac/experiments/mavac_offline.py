@@ -102,8 +102,9 @@ def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: in
     """
     params = InspectionParams() if params is None else params
     methods = tuple(visibility)
-    for m in methods:
-        dataclasses.replace(params.visibility, method=m)  # fail before the expensive preparation
+    for m in methods:  # fail before the expensive preparation
+        if m not in VISIBILITY_METHODS:
+            raise ValueError(f"visibility must hold methods of {VISIBILITY_METHODS}, got {m!r}")
     items = [(m, seed0 + t, tuple(P_s_values), methods, params) for m in machines for t in range(trials)]
     out = map_trials(_table1_trial, items, n_jobs=n_jobs, desc="Table 1 trials")
     return pd.DataFrame([r for rows in out for r in rows])
