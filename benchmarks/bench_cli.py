@@ -16,7 +16,6 @@ Prints a table and ends with ``SECONDS cli_inspect_test_bench_raycast <t>``. Wit
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import subprocess
 import sys
@@ -76,17 +75,15 @@ def _hpr_plan_rescored(path: Path, units: str, fast: bool) -> tuple[float, float
     from mavac.geometry.mesh import load_mesh
     from mavac.inspection.coverage import coverage_overlap
     from mavac.inspection.plan import plan_inspection
-    from mavac.params import InspectionParams
+    from mavac.params import InspectionParams, Visibility
     from mavac.vision.visibility import VisibilityScene, visible_from
 
-    params = fast_params() if fast else InspectionParams()
-    params = dataclasses.replace(params, spot=dataclasses.replace(params.spot, visibility="hpr"),
-                                 guard=dataclasses.replace(params.guard, visibility="hpr"))
+    params = (fast_params() if fast else InspectionParams()).with_visibility("hpr")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         plan = plan_inspection(machine_from_mesh(load_mesh(path, units=units, role="machine")), params=params)
-    exact = visible_from(plan.points, plan.normals, plan.world_T_camera, params.camera, method="raycast",
-                         mesh=VisibilityScene(plan.mesh))
+    exact = visible_from(plan.points, plan.normals, plan.world_T_camera, params.camera, Visibility("raycast"),
+                         scene=VisibilityScene(plan.mesh))
     return plan.C, coverage_overlap(exact, len(plan.points))[0]
 
 
@@ -100,6 +97,8 @@ def _run(argv: list[str]) -> float:
 
 
 def main() -> None:
+    from mavac.params import VISIBILITY_METHODS
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="pass --fast to inspect and reach")
     ap.add_argument("--screenshots", type=Path, default=None, help="write README screenshots here")
@@ -114,7 +113,7 @@ def main() -> None:
         for name, (path, units, kind) in meshes.items():
             if kind != "machine":
                 continue
-            for vis in ("hpr", "raycast"):
+            for vis in VISIBILITY_METHODS:
                 out = tmp / f"{name}_{vis}.html"
                 s = _run(["inspect", str(path), "--units", units, "--visibility", vis, "--out", str(out), *fast])
                 plan = json.loads(out.with_name(f"{path.stem}_plan.json").read_text())

@@ -9,6 +9,7 @@ same guard poses, FOV test included in both (aim: <= 2).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -18,7 +19,7 @@ def main() -> None:
     from mavac.geometry.machines import test_bench
     from mavac.inspection.plan import plan_from_context, prepare_offline
     from mavac.inspection.reachability import reachability_map
-    from mavac.params import InspectionParams
+    from mavac.params import InspectionParams, Visibility
     from mavac.robots.models import ur10_mobile
     from mavac.vision.visibility import VisibilityScene, visible_from
 
@@ -37,7 +38,7 @@ def main() -> None:
           f"({plan.timings['reachability_map']:.2f} s: built on a cold cache, loaded otherwise)")
     print(f"|S| = {len(plan.points)}, candidate spots {len(ctx.candidates)}, spots {plan.n_spots}, "
           f"guards {plan.n_guards}, NoS guards {plan.n_nos_guards}, C = {plan.C:.3f}, O = {plan.O:.3f} "
-          f"({params.visibility} visibility)")
+          f"({plan.visibility} visibility)")
     print("time per stage (s):")
     for k, v in plan.timings.items():
         print(f"  {k:18s} {v:7.2f}")
@@ -50,10 +51,10 @@ def main() -> None:
     poses = np.concatenate([ctx.guard_candidates(int(r)).world_T_camera for r in plan.spot_selection.greedy.selected])
     cam = params.camera
     t0 = time.perf_counter()
-    hpr = visible_from(plan.points, plan.normals, poses, cam, method="hpr", hpr_input=params.guard.hpr_input)
+    hpr = visible_from(plan.points, plan.normals, poses, cam, dataclasses.replace(params.visibility, method="hpr"))
     t_hpr = time.perf_counter() - t0
     t0 = time.perf_counter()
-    ray = visible_from(plan.points, plan.normals, poses, cam, method="raycast", mesh=VisibilityScene(machine.mesh))
+    ray = visible_from(plan.points, plan.normals, poses, cam, Visibility("raycast"), scene=VisibilityScene(machine.mesh))
     t_ray = time.perf_counter() - t0
     print(f"visibility of {len(poses)} guard poses: HPR {t_hpr:.2f} s, ray casting {t_ray:.2f} s "
           f"(pairs where they disagree: {np.mean(hpr != ray):.3%})")

@@ -73,11 +73,13 @@ def _inspection_params(args):
         params = fast_params()
     else:
         params = InspectionParams()
-    spot = dataclasses.replace(params.spot, visibility=args.visibility, P_s=args.P_s)
-    guard = dataclasses.replace(params.guard, visibility=args.visibility, P_g=args.P_g)
+    spot = dataclasses.replace(params.spot, P_s=args.P_s)
+    guard = dataclasses.replace(params.guard, P_g=args.P_g)
     nos = dataclasses.replace(params.nos, enabled=not args.no_nos)
+    visibility = dataclasses.replace(params.visibility, method=args.visibility, radius=args.hpr_radius)
     spacing = params.surface_spacing if args.spacing is None else args.spacing
-    return dataclasses.replace(params, surface_spacing=spacing, seed=args.seed, spot=spot, guard=guard, nos=nos)
+    return dataclasses.replace(params, surface_spacing=spacing, seed=args.seed, spot=spot, guard=guard, nos=nos,
+                               visibility=visibility)
 
 
 def cmd_inspect(args) -> int:
@@ -165,7 +167,7 @@ def cmd_reach(args) -> int:
     with bar:
         machine = machine_from_mesh(_load(args.mesh, args.units, "machine", args.up), name=stem)
         _next(bar, "reach study")
-        study = reach_study(machine, params=params, visibility=args.visibility, progress=_bars(args))
+        study = reach_study(machine, params=params, progress=_bars(args))
         _next(bar, "writing")
         study.to_csv(csv)
         study.to_html(out)
@@ -185,7 +187,11 @@ def _common(p: argparse.ArgumentParser, *, role: str) -> None:
 
 
 def _machine_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--visibility", choices=("raycast", "hpr"), default="raycast", help=VISIBILITY_HELP)
+    from .params import VISIBILITY_METHODS, Visibility
+
+    p.add_argument("--visibility", choices=VISIBILITY_METHODS, default=Visibility.method, help=VISIBILITY_HELP)
+    p.add_argument("--hpr-radius", dest="hpr_radius", type=float, default=None,
+                   help="HPR radius in metres for every viewpoint (default: a factor of the farthest point distance)")
     p.add_argument("--spacing", type=float, default=None,
                    help="distance between surface elements of S, metres (default 0.05; 0.10 with --fast)")
     p.add_argument("--P-s", dest="P_s", type=float, default=0.02,

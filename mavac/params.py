@@ -25,9 +25,8 @@ from .validate import check_fields, check_int, check_nonnegative, check_positive
 class CameraParams:
     """Emulated camera of MAVAC ("Camera field of view (FOV)"): a rectangular pyramid along the
     camera x axis with half-angles ``theta_a`` (camera XY plane) and ``theta_b`` (XZ plane),
-    cut at the reliable detection limit ``L_d`` (metres along x), followed by hidden point
-    removal (Katz et al. 2007) with spherical-flipping radius
-    ``hpr_radius_factor * max_i |s_i - viewpoint|``.
+    cut at the reliable detection limit ``L_d`` (metres along x). What inside it is hidden is
+    decided by :class:`Visibility`.
     """
 
     # The paper's camera is an Azure Kinect (MAVAC, Fig. 5) but it gives no angles. Azure
@@ -42,19 +41,11 @@ class CameraParams:
     # the HSV filter, and it is the NFOV depth minimum range (spec 0.5-3.86 m), so the guard
     # target (placed L_d along the normal) still gets depth.
     L_d: float = 0.5
-    # HPR radius for this camera at its guard stand-off L_d (spot visibility, seen from farther,
-    # has its own: SpotParams.hpr_radius_factor): factor x farthest point distance; the paper
-    # gives none, Katz et al. need R > max distance (factor > 1). Ours: 10, chosen from our
-    # sensitivity study against ray casting over guard poses (data/results/mavac_hpr_radius.csv,
-    # notebook 03): the factor that misclassifies the fewest in-FOV pairs over the three machines.
-    hpr_radius_factor: float = 10.0
-
     def __post_init__(self):
         check_fields(self)
         check_range("theta_a", self.theta_a, 0.0, math.pi / 2, lo_open=True, hi_open=True)
         check_range("theta_b", self.theta_b, 0.0, math.pi / 2, lo_open=True, hi_open=True)
         check_positive("L_d", self.L_d)
-        check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
 
 
 # ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (read by mavac/scrubbing/lissajous.py, mavac/sim/wear.py, mavac/scrubbing/gpr.py) ----
@@ -515,7 +506,80 @@ class SetupPlannerParams:
 
 # ---- MAVAC offline planning: reachability map, spots, guards, NoS (read by mavac/inspection) ----
 
-_VISIBILITY_METHODS = ("hpr", "raycast")
+#: Legal values of ``Visibility.method``: MAVAC's hidden point removal, and exact ray casting
+#: against the mesh (ours for users). Tables list them in this order.
+VISIBILITY_METHODS = ("hpr", "raycast")
+#: Legal values of ``Visibility.hpr_input`` (see :mod:`mavac.vision.visibility`).
+HPR_INPUTS = ("surface", "fov")
+
+
+@dataclass(frozen=True)
+class Visibility:
+    """How "the camera sees a surface element" is decided, for spots, guards and NoS guards
+    (MAVAC, "Camera field of view (FOV)": FOV pyramid, then hidden point removal).
+
+    ``method`` is ``"raycast"`` (exact: nothing of the mesh on the segment, and the element
+    faces the viewpoint) or ``"hpr"`` (Katz, Tal and Basri 2007, with Open3D). HPR's
+    spherical-flipping radius is ``radius`` (m) when given, else a factor times the farthest
+    point distance ``max_i |s_i - viewpoint|``: ``radius_factor`` at guard views,
+    ``spot_radius_factor`` at the farther spot viewpoints. Katz et al. need the radius to exceed
+    that distance, so each factor must be > 1 (and an absolute radius is checked per viewpoint).
+
+    Call :meth:`visible` (pairs of viewpoints and elements) or :meth:`visible_each` (element i
+    from viewpoint i); both run :func:`mavac.vision.visibility.visible_points`.
+    """
+
+    method: str = "raycast"
+    # Ours: 10, the factor that misclassifies the fewest in-FOV pairs against ray casting over
+    # guard poses at L_d = 0.5 m on the three machines (data/results/mavac_hpr_radius.csv,
+    # notebook 03); the paper gives no radius.
+    radius_factor: float = 10.0
+    # Ours: 30 at the spot viewpoints (0.5-3 m from the surface), chosen the same way
+    # (data/results/mavac_hpr_radius_spots.csv, notebook 02); 10 hid ~1/4 of what a spot sees.
+    spot_radius_factor: float = 30.0
+    # Absolute radius, m, for every viewpoint; None = the factors above. The authors' code uses
+    # 10 (will-44/cleaning, script/class_fov_emulator.py, get_visible_point_pyramid).
+    radius: float | None = None
+    # Point set HPR runs on at guard views: "surface" = all of S (Fig. 3 shows HPR points outside
+    # the pyramid), "fov" = only the points in the FOV (see mavac.vision.visibility).
+    hpr_input: str = "surface"
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.method not in VISIBILITY_METHODS:
+            raise ValueError(f"method must be one of {VISIBILITY_METHODS}, got {self.method!r}")
+        check_range("radius_factor", self.radius_factor, 1.0, math.inf, lo_open=True)
+        check_range("spot_radius_factor", self.spot_radius_factor, 1.0, math.inf, lo_open=True)
+        if self.radius is not None:
+            check_positive("radius", self.radius)
+        if self.hpr_input not in HPR_INPUTS:
+            raise ValueError(f"hpr_input must be one of {HPR_INPUTS}, got {self.hpr_input!r}")
+
+    def at_spots(self) -> Visibility:
+        """This visibility at spot viewpoints: ``spot_radius_factor`` replaces ``radius_factor``."""
+        return replace(self, radius_factor=self.spot_radius_factor)
+
+    def hpr_radius(self, max_distance: float) -> float:
+        """HPR radius (m) for a viewpoint whose farthest point is ``max_distance`` (m) away."""
+        if self.radius is None:
+            return self.radius_factor * max_distance
+        if not self.radius > max_distance:
+            raise ValueError(f"radius = {self.radius!r} m must exceed the farthest point distance "
+                             f"{max_distance:.3g} m (Katz et al. 2007); choose a larger radius")
+        return self.radius
+
+    def visible(self, points, normals, viewpoints, *, scene=None, candidates=None) -> np.ndarray:
+        """(m, n) bool: element j seen from viewpoint i (see
+        :func:`mavac.vision.visibility.visible_points` for the shapes and ``scene``)."""
+        from .vision.visibility import visible_points
+
+        return visible_points(self, points, normals, viewpoints, scene=scene, candidates=candidates)
+
+    def visible_each(self, points, normals, viewpoints, *, scene=None) -> np.ndarray:
+        """(n,) bool: element i seen from viewpoint i (:func:`mavac.vision.visibility.visible_each`)."""
+        from .vision.visibility import visible_each
+
+        return visible_each(self, points, normals, viewpoints, scene=scene)
 
 
 def _check_positive_tuple(name: str, values) -> None:
@@ -574,16 +638,6 @@ class SpotParams:
     # Ours: "visible from a spot" = visible from a viewpoint above the base at one of these
     # heights (m), a stand-in for where the arm can hold the camera.
     view_heights: tuple = (0.8, 1.6)
-    # Ours for users: "raycast" = exact ray casting against the mesh with a back-face test.
-    # MAVAC uses hidden point removal, "hpr": the notebooks that reproduce the paper select it
-    # with InspectionParams.with_visibility("hpr").
-    visibility: str = "raycast"
-    # HPR radius factor at these viewpoints (0.5-3 m from the surface, farther than a guard's
-    # L_d): ours, the factor that misclassifies the fewest (viewpoint, element) pairs against
-    # ray casting over the three machines (data/results/mavac_hpr_radius_spots.csv, notebook 02).
-    # The guards' factor 10 hid ~1/4 of the elements really visible from a spot.
-    hpr_radius_factor: float = 30.0
-
     def __post_init__(self):
         check_fields(self)
         check_unit("P_s", self.P_s)
@@ -596,9 +650,6 @@ class SpotParams:
         for a in self.heading_offsets:
             check_range("heading_offsets", a, -math.pi, math.pi)
         _check_positive_tuple("view_heights", self.view_heights)
-        if self.visibility not in _VISIBILITY_METHODS:
-            raise ValueError(f"visibility must be one of {_VISIBILITY_METHODS}, got {self.visibility!r}")
-        check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -614,13 +665,11 @@ class GuardParams:
     # Ours: one guard candidate per small cluster of surface elements of this size, m
     # (the paper assigns "a guard point to each surface").
     guard_spacing: float = 0.10
-    # Ours for users: FOV + "raycast" (exact ray casting with a back-face test). MAVAC uses
-    # FOV + HPR, "hpr" (radius CameraParams.hpr_radius_factor): the notebooks that reproduce the
-    # paper select it with InspectionParams.with_visibility("hpr").
-    visibility: str = "raycast"
-    # Point set HPR runs on: "surface" = all of S (Fig. 3 shows HPR points outside the
-    # pyramid, so the paper runs HPR on the whole cloud), "fov" = only the points in the FOV.
-    hpr_input: str = "surface"
+    # Guard stand-off along the target's normal, m. None = CameraParams.L_d, the paper's text:
+    # "The guard point is placed along this normal at a distance corresponding to the reliable
+    # detection limit of the camera". The authors' code places it 0.4 m out instead (will-44/cleaning,
+    # rubyrhod_ws/src/cleaning/script/offline.py, generate_pcd_guard).
+    standoff: float | None = None
     # Ours: clearance to the machine for a guard configuration, m.
     collision_margin: float = 0.01
 
@@ -630,10 +679,8 @@ class GuardParams:
         check_unit("k1", self.k1)
         check_unit("k2", self.k2)
         check_positive("guard_spacing", self.guard_spacing)
-        if self.visibility not in _VISIBILITY_METHODS:
-            raise ValueError(f"visibility must be one of {_VISIBILITY_METHODS}, got {self.visibility!r}")
-        if self.hpr_input not in ("surface", "fov"):
-            raise ValueError(f"hpr_input must be 'surface' or 'fov', got {self.hpr_input!r}")
+        if self.standoff is not None:
+            check_positive("standoff", self.standoff)
         check_nonnegative("collision_margin", self.collision_margin)
 
 
@@ -693,17 +740,23 @@ class InspectionParams:
     guard: GuardParams = GuardParams()
     nos: NoSParams = NoSParams()
 
-    @property
-    def visibility(self) -> str:
-        """Visibility method behind C and O: ``"raycast"``, ``"hpr"``, or both named per stage."""
-        spot, guard = self.spot.visibility, self.guard.visibility
-        return guard if spot == guard else f"spots {spot}, guards {guard}"
+    # Ours for users: exact ray casting ("raycast"); MAVAC's hidden point removal is
+    # Visibility("hpr"), which the notebooks that reproduce the paper select. One choice for
+    # spots, guards and NoS guards.
+    visibility: Visibility = Visibility()
 
-    def with_visibility(self, method: str) -> InspectionParams:
-        """The same parameters with ``method`` ("raycast" or "hpr", MAVAC's) for spots and guards."""
-        if method not in _VISIBILITY_METHODS:
-            raise ValueError(f"method must be one of {_VISIBILITY_METHODS}, got {method!r}")
-        return replace(self, spot=replace(self.spot, visibility=method), guard=replace(self.guard, visibility=method))
+    @property
+    def guard_standoff(self) -> float:
+        """Distance of a guard camera from its target along the normal, m (``guard.standoff``,
+        else the camera's ``L_d``)."""
+        return self.camera.L_d if self.guard.standoff is None else self.guard.standoff
+
+    def with_visibility(self, visibility: str | Visibility) -> InspectionParams:
+        """The same parameters with another visibility: a :class:`Visibility`, or a method name
+        (``"raycast"`` or ``"hpr"``) that replaces only ``visibility.method``."""
+        if isinstance(visibility, str):
+            visibility = replace(self.visibility, method=visibility)
+        return replace(self, visibility=visibility)
 
     def __post_init__(self):
         check_fields(self)
@@ -951,6 +1004,11 @@ class OnlineParams:
 
 
 
+#: Gradient-descent variants of candidate sampling, Kabir Table I names ("a" spells alpha);
+#: "none" is sampling without gradient descent (read by mavac.setups.sampling).
+SAMPLING_VARIANTS = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_XYa")
+
+
 @dataclass(frozen=True)
 class SetupPlanParams:
     """Everything ``mavac.setups.plan.plan_setups`` needs: setup space, reach test, candidate
@@ -983,9 +1041,8 @@ class SetupPlanParams:
         if self.sampling_method not in ("uniform", "hierarchical", "random"):
             raise ValueError(f"sampling_method must be 'uniform', 'hierarchical' or 'random', "
                              f"got {self.sampling_method!r}")
-        variants = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_XYa")
-        if self.variant not in variants:
-            raise ValueError(f"variant must be one of {variants}, got {self.variant!r}")
+        if self.variant not in SAMPLING_VARIANTS:
+            raise ValueError(f"variant must be one of {SAMPLING_VARIANTS}, got {self.variant!r}")
         check_int("seed", self.seed, lo=0)
         check_positive("cleaning_rate", self.cleaning_rate)
         if self.method not in ("milp", "dfbnb", "both"):

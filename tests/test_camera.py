@@ -46,7 +46,6 @@ def fov_by_angles(points_camera, camera):
         ("theta_b", 2.0),
         ("L_d", 0.0),
         ("L_d", -1.0),
-        ("hpr_radius_factor", 1.0),
     ],
 )
 def test_camera_params_reject_bad_values(field, value):

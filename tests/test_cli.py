@@ -44,7 +44,7 @@ def test_inspect_writes_a_plan_that_names_its_visibility(files, tmp_path, capsys
     assert code == 0, err
     plan = json.loads((tmp_path / "cabinet_plan.json").read_text())  # beside the HTML page
     assert plan["visibility"] == "raycast"
-    assert plan["params"]["spot"]["visibility"] == plan["params"]["guard"]["visibility"] == "raycast"
+    assert plan["params"]["visibility"]["method"] == "raycast"
     assert 0.0 < plan["C"] <= 1.0 and plan["poses"] and len(plan["poses"][0]["q"]) == 6
     assert "(raycast visibility)" in out and "wrote" in out
     html = (tmp_path / "plan.html").read_text()
@@ -65,6 +65,7 @@ def test_inspect_with_hpr_and_default_output_folder(files, tmp_path, capsys, mon
     (["inspect", "{cabinet}", "--fast"], "1200 m across after reading it in 'm'.* pass --units mm"),
     (["inspect", "{missing}"], "does not exist"),
     (["inspect", "{cabinet}", "--units", "mm", "--P-s", "1.5"], "P_s must be in"),
+    (["inspect", "{cabinet}", "--units", "mm", "--visibility", "hpr", "--hpr-radius", "-1"], "radius must be in"),
     (["reach", "{cabinet}", "--units", "mm", "--spacing", "-0.1"], "surface_spacing must be in"),
     (["setups", "{dome}", "--units", "mm", "--stain", "left:3"], "stain spec 'left:3' not understood"),
     (["setups", "{dome}", "--units", "mm", "--stain", "sphere:500,500,500,1"], "picked no face"),

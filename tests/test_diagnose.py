@@ -15,7 +15,7 @@ from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_of
 def test_a_tall_tower_is_reported_too_high():
     tower = machine_from_mesh(trimesh.creation.box(bounds=[[0, 0, 0], [0.4, 0.4, 4.0]]), name="tower")
     params = dataclasses.replace(fast_params(), nos=dataclasses.replace(fast_params().nos, enabled=False))
-    assert params.visibility == "raycast"  # the default: the message names it
+    assert params.visibility.method == "raycast"  # the default: the message names it
     with pytest.warns(UserWarning, match=r"coverage is low: C = 0\.\d\d \(raycast visibility\).*too high for the camera"):
         plan = plan_inspection(tower, params=params)
     assert plan.C < LOW_COVERAGE and any("too high" in w for w in plan.warnings)

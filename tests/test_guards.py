@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from mavac.inspection import guards as G
-from mavac.params import CameraParams, GuardParams
+from mavac.params import CameraParams, GuardParams, InspectionParams, Visibility
 
 
 def test_guard_targets_one_per_cluster_never_across_an_edge():
@@ -64,7 +64,7 @@ def test_candidates_fov_bounds_visibility_and_lazy_equals_eager(setup):
     assert np.allclose(cand.world_T_camera[:, :3, 3], pts[cand.target] + cam.L_d * nrm[cand.target], atol=1e-4)
     assert np.allclose(cand.world_T_camera[:, :3, 0], -nrm[cand.target], atol=1e-3)
     scene = VisibilityScene(box)  # the default visibility is exact ray casting
-    vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params, vis_scene=scene)
+    vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, Visibility(), vis_scene=scene)
     assert np.all(vis <= cand.fov)  # FOV is an upper bound
     sel = G.select_guards(cand, pts, nrm, cam, params, vis_scene=scene)
     eager = G.greedy_select(vis, params.P_g, weights=cand.maneuverability, k1=params.k1, k2=params.k2)
@@ -81,8 +81,8 @@ def test_raycast_option(setup):
     cam = CameraParams()
     targets = G.guard_targets(pts, nrm, 0.3)
     cand = G.guard_candidates(robot, checker, np.eye(4), pts, nrm, targets, cam, np.random.default_rng(0))
-    params = GuardParams(visibility="raycast")
-    sel = G.select_guards(cand, pts, nrm, cam, params, vis_scene=VisibilityScene(box))
+    sel = G.select_guards(cand, pts, nrm, cam, GuardParams(), visibility=Visibility("raycast"),
+                          vis_scene=VisibilityScene(box))
     assert len(sel.greedy.selected) >= 1
     assert np.all(sel.visible <= sel.guards.fov)
 
@@ -129,11 +129,33 @@ def test_guard_sees_its_own_target_face(setup):
     rows = np.arange(len(cand))
     assert len(cand) > 5
     assert cand.fov[rows, cand.target].all()
-    for params, scene in ((GuardParams(visibility="hpr"), None), (GuardParams(visibility="raycast"), VisibilityScene(box))):
-        vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, params, vis_scene=scene)
-        assert vis[rows, cand.target].all(), params.visibility
+    for visibility, scene in ((Visibility("hpr"), None), (Visibility("raycast"), VisibilityScene(box))):
+        vis = G.guard_visibility(cand.world_T_camera, pts, nrm, cam, visibility, vis_scene=scene)
+        assert vis[rows, cand.target].all(), visibility.method
         for i in rows:
             face = _coplanar_in_view(pts, nrm, cand.target[i], cand.world_T_camera[i:i + 1], cam)
             assert cand.fov[i, face].all()
-            if params.visibility == "raycast":  # exact visibility: the whole face in view is seen
+            if visibility.method == "raycast":  # exact visibility: the whole face in view is seen
                 assert vis[i, face].all()
+
+
+def test_standoff_moves_the_guard_camera(setup):
+    """GuardParams.standoff (the authors' code: 0.4 m) places the camera that far from its
+    target along the normal, independently of the pyramid depth L_d; None keeps L_d."""
+    robot, box, checker, pts, nrm = setup
+    cam = CameraParams(L_d=0.7)
+    targets = G.guard_targets(pts, nrm, 0.2)
+    near = G.guard_candidates(robot, checker, np.eye(4), pts, nrm, targets, cam, np.random.default_rng(0),
+                              standoff=0.4)
+    assert len(near) > 3
+    dist = np.linalg.norm(near.world_T_camera[:, :3, 3] - pts[near.target], axis=1)
+    np.testing.assert_allclose(dist, 0.4, atol=1e-4)
+    assert np.allclose(near.world_T_camera[:, :3, 0], -nrm[near.target], atol=1e-3)
+    assert near.fov[np.arange(len(near)), near.target].all()  # the target is well inside the 0.7 m pyramid
+    assert InspectionParams(camera=cam, guard=GuardParams(standoff=0.4)).guard_standoff == 0.4
+    assert InspectionParams(camera=cam).guard_standoff == 0.7  # None: the paper's L_d
+    with pytest.raises(ValueError, match="standoff"):
+        GuardParams(standoff=0.0)
+    with pytest.raises(ValueError, match="standoff"):
+        G.guard_candidates(robot, checker, np.eye(4), pts, nrm, targets, cam, np.random.default_rng(0),
+                           standoff=-0.4)

@@ -8,11 +8,11 @@ import pandas as pd
 import pytest
 
 from mavac.experiments import mavac_offline as mo
-from mavac.params import InspectionParams, SpotParams
+from mavac.params import InspectionParams, SpotParams, Visibility
 
 
 def test_spot_hpr_radius_is_calibrated_at_spot_distances():
-    """SpotParams.hpr_radius_factor is the factor that misclassifies the fewest (viewpoint,
+    """Visibility.spot_radius_factor is the factor that misclassifies the fewest (viewpoint,
     element) pairs against exact ray casting at the spot viewpoints of the three machines
     (half the candidate spots, to keep the test short); the guards' factor, calibrated at
     L_d = 0.5 m, is not."""
@@ -20,8 +20,8 @@ def test_spot_hpr_radius_is_calibrated_at_spot_distances():
     sweep = mo.spot_hpr_radius_sweep(params=params)
     assert set(sweep["machine"]) == {"test_bench", "sanding_machine", "milling_machine"}
     best = mo.best_radius_factor(sweep)
-    assert best == SpotParams().hpr_radius_factor
-    assert best != InspectionParams().camera.hpr_radius_factor
+    assert best == Visibility().spot_radius_factor
+    assert best != Visibility().radius_factor
     # misclassification is worse on both sides of the optimum: a real minimum, not an edge
     factors = sorted(sweep["radius_factor"].unique())
     assert factors[0] < best < factors[-1]

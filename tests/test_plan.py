@@ -8,7 +8,7 @@ import pytest
 import trimesh
 
 from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline, short_open_path
-from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams)
+from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams, Visibility)
 
 FAST = InspectionParams(
     surface_spacing=0.1,
@@ -168,14 +168,16 @@ def test_bad_input(ctx):
     (GuardParams, dict(P_g=1.5), "P_g"), (GuardParams, dict(P_g=-0.5), "P_g"),
     (GuardParams, dict(k1=1.1), "k1"), (GuardParams, dict(k1=-0.1), "k1"),
     (GuardParams, dict(k2=2.0), "k2"), (GuardParams, dict(k2=-1.0), "k2"),
-    (GuardParams, dict(visibility="exact"), "visibility"), (GuardParams, dict(hpr_input="all"), "hpr_input"),
+    (GuardParams, dict(standoff=0.0), "standoff"), (GuardParams, dict(standoff=-0.4), "standoff"),
     (GuardParams, dict(guard_spacing=0.0), "guard_spacing"),
     (SpotParams, dict(ring_distances=()), "ring_distances"), (SpotParams, dict(ring_distances=(-1.0,)), "ring_distances"),
-    (SpotParams, dict(visibility="x"), "visibility"), (SpotParams, dict(view_heights=(0.0,)), "view_heights"),
+    (Visibility, dict(method="x"), "method"), (Visibility, dict(hpr_input="all"), "hpr_input"),
+    (Visibility, dict(radius=0.0), "radius"), (SpotParams, dict(view_heights=(0.0,)), "view_heights"),
     (NoSParams, dict(eps_factor=0.0), "eps_factor"), (NoSParams, dict(n_rays=2), "n_rays"),
     (NoSParams, dict(rrt_time_limit=0.0), "rrt_time_limit"), (NoSParams, dict(max_ray_tries=0), "max_ray_tries"),
     (NoSParams, dict(rrt_max_iterations=0), "rrt_max_iterations"),
     (InspectionParams, dict(surface_spacing=-0.1), "surface_spacing"), (InspectionParams, dict(spot=0.02), "spot"),
+    (InspectionParams, dict(visibility="hpr"), "visibility"),
 ])
 def test_parameter_validation(cls, kw, name):
     with pytest.raises(ValueError, match=name):
@@ -222,11 +224,11 @@ def test_pose_set_attributes_of_the_plan(plan):
 
 def test_exact_ray_casting_is_the_default_and_hpr_is_one_call_away(ctx, plan):
     """Users get exact ray casting with a back-face test; the paper's HPR is selected explicitly."""
-    assert InspectionParams().visibility == "raycast" and plan.params.visibility == "raycast"
+    assert InspectionParams().visibility == Visibility("raycast") and plan.visibility == "raycast"
     hpr = InspectionParams().with_visibility("hpr")
-    assert hpr.spot.visibility == hpr.guard.visibility == hpr.visibility == "hpr"
-    mixed = dataclasses.replace(hpr, guard=GuardParams(visibility="raycast"))
-    assert mixed.visibility == "spots hpr, guards raycast"
+    assert hpr.visibility == Visibility("hpr") and hpr.spot == SpotParams() and hpr.guard == GuardParams()
+    authors = InspectionParams().with_visibility(Visibility("hpr", radius=10.0))
+    assert authors.visibility.radius == 10.0
     with pytest.raises(ValueError, match="method"):
         InspectionParams().with_visibility("exact")
     # no pose sees an element that faces away from its camera
@@ -236,7 +238,30 @@ def test_exact_ray_casting_is_the_default_and_hpr_is_one_call_away(ctx, plan):
 
 
 def test_accessible_sets_with_other_visibility_from_one_context(ctx):
-    np.testing.assert_array_equal(ctx.accessible_with(ctx.params.spot), ctx.accessible)
-    hpr = ctx.accessible_with(dataclasses.replace(ctx.params.spot, visibility="hpr"))
+    np.testing.assert_array_equal(ctx.accessible_with(ctx.params.visibility), ctx.accessible)
+    hpr = ctx.accessible_with(Visibility("hpr"))
     assert hpr.shape == ctx.accessible.shape and not np.array_equal(hpr, ctx.accessible)
     assert not np.any(hpr & ~ctx.reachable)  # visibility only removes elements from the reachable ones
+
+
+def test_the_authors_offline_settings_run_through_the_pipeline(robot):
+    """The MAVAC authors' ROS code (will-44/cleaning): 45 x 35 deg pyramid 0.7 m deep, guards
+    0.4 m along the normal, HPR at an absolute radius of 10 m. Every guard camera then stands
+    0.4 m from its target, and the plan's coverage is counted with that HPR."""
+    import math
+
+    from mavac.params import CameraParams
+
+    params = dataclasses.replace(
+        FAST, camera=CameraParams(theta_a=math.radians(45), theta_b=math.radians(35), L_d=0.7),
+        guard=dataclasses.replace(FAST.guard, standoff=0.4), visibility=Visibility("hpr", radius=10.0),
+        nos=dataclasses.replace(FAST.nos, enabled=False))
+    assert params.guard_standoff == 0.4
+    authors = plan_inspection(_box_machine(), robot=robot, params=params)
+    guards = np.flatnonzero(authors.pose_kind == "guard")
+    assert len(guards) > 0 and authors.visibility == "hpr"
+    dist = np.linalg.norm(authors.world_T_camera[guards, :3, 3] - authors.points[authors.pose_target[guards]], axis=1)
+    np.testing.assert_allclose(dist, 0.4, atol=1e-3)
+    # the same plan with the radius as a factor of the farthest distance counts other elements
+    factor = plan_inspection(_box_machine(), robot=robot, params=params.with_visibility(Visibility("hpr")))
+    assert not np.array_equal(factor.visible, authors.visible)

@@ -1,3 +1,4 @@
+import dataclasses
 import warnings
 
 import numpy as np
@@ -27,7 +28,7 @@ def step_under_slab():
 def studies(step_under_slab):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return {v: reach_study(step_under_slab, params=fast_params(), visibility=v) for v in ("raycast", "hpr")}
+        return {v: reach_study(step_under_slab, params=fast_params().with_visibility(v)) for v in ("raycast", "hpr")}
 
 
 def test_scores_are_maneuverability_of_reached_and_seen_elements(studies):
@@ -70,5 +71,7 @@ def test_visibility_method_only_changes_what_is_seen(studies):
 
 
 def test_bad_visibility_is_refused(step_under_slab):
-    with pytest.raises(ValueError, match="visibility must be 'raycast' or 'hpr'"):
-        reach_study(step_under_slab, params=fast_params(), visibility="exact")
+    with pytest.raises(ValueError, match="method must be one of"):
+        fast_params().with_visibility("exact")
+    with pytest.raises(TypeError, match="visibility"):
+        reach_study(step_under_slab, params=dataclasses.replace(fast_params(), visibility="hpr"))

@@ -2,7 +2,6 @@
 and a headless-Chromium screenshot that is not blank."""
 
 import base64
-import dataclasses
 import re
 import warnings
 
@@ -35,8 +34,7 @@ def plan():
     pocket = trimesh.creation.box(bounds=[[0.3, 0.15, 0.5], [0.9, 0.45, 1.0]])
     mesh = trimesh.boolean.difference([body, pocket], engine="manifold")
     p = fast_params()
-    params = dataclasses.replace(p, spot=dataclasses.replace(p.spot, visibility="raycast"),
-                                 guard=dataclasses.replace(p.guard, visibility="raycast"))
+    params = p.with_visibility("raycast")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a low-coverage warning is not what this module tests
         return plan_inspection(machine_from_mesh(mesh, name="cabinet"), params=params)

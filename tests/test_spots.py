@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from mavac.inspection import spots as SP
-from mavac.params import CameraParams, ReachabilityMapParams, SpotParams
+from mavac.params import CameraParams, InspectionParams, ReachabilityMapParams, SpotParams, Visibility
 
 RECT = np.array([[-1.0, -0.5], [1.0, -0.5], [1.0, 0.5], [-1.0, 0.5]])
 
@@ -79,42 +79,48 @@ def test_spot_visibility_and_accessibility(box):
     pts = np.array([[0.0, -0.5, 0.4], [0.0, 0.5, 0.4], [0.0, 0.0, 0.8], [0.9, -0.5, 0.4]])
     nrm = np.array([[0, -1.0, 0], [0, 1.0, 0], [0, 0, 1.0], [0, -1.0, 0]])
     spot = np.array([[0.0, -1.1, 0.0]])
-    vis = SP.spot_visibility(pts, nrm, spot, SpotParams(view_heights=(0.8, 1.6), visibility="raycast"),
+    vis = SP.spot_visibility(pts, nrm, spot, SpotParams(view_heights=(0.8, 1.6)), Visibility("raycast"),
                              vis_scene=VisibilityScene(box))
     assert vis.tolist() == [[True, False, True, True]]
     rmap = reachability_map(ur10_mobile(), ReachabilityMapParams(voxel_size=0.1, n_directions=26,
                                                                  n_samples=20_000, n_rotations=32))
-    acc = SP.accessible_sets(rmap, spot, pts, nrm, vis, CameraParams())
+    acc = SP.accessible_sets(rmap, spot, pts, nrm, vis, CameraParams().L_d)
     assert acc[0, 0]  # front face, right in front of the base
     assert not acc[0, 1]  # back face: not visible
-    far = SP.accessible_sets(rmap, np.array([[0.0, -4.0, 0.0]]), pts, nrm, np.ones((1, 4), bool), CameraParams())
+    far = SP.accessible_sets(rmap, np.array([[0.0, -4.0, 0.0]]), pts, nrm, np.ones((1, 4), bool), CameraParams().L_d)
     assert not far.any()  # out of reach
 
 
 def test_spot_hpr_uses_the_radius_calibrated_for_spots(box):
-    """Spot visibility runs HPR with SpotParams.hpr_radius_factor (calibrated at spot distances),
-    not with the camera's factor, which was calibrated at the guards' L_d = 0.5 m."""
+    """Spot visibility runs HPR with Visibility.spot_radius_factor (calibrated at spot distances),
+    not with the guards' factor, which was calibrated at the guards' L_d = 0.5 m."""
     from mavac.vision.visibility import hpr_visible
 
     pts, fi = trimesh.sample.sample_surface_even(box, 800, seed=2)
     spots = np.array([[0.0, -1.1, 0.0], [1.6, 0.3, 1.0]])
-    params = SpotParams(view_heights=(0.8, 1.6), visibility="hpr")
-    assert params.hpr_radius_factor != CameraParams().hpr_radius_factor
-    vis = SP.spot_visibility(pts, box.face_normals[fi], spots, params)
+    params = SpotParams(view_heights=(0.8, 1.6))
+    hpr = Visibility("hpr")
+    assert hpr.spot_radius_factor != hpr.radius_factor
+    vis = SP.spot_visibility(pts, box.face_normals[fi], spots, params, hpr)
     views = SP.spot_viewpoints(spots, params.view_heights)
     np.testing.assert_allclose(views[:2], [[0.0, -1.1, 0.8], [0.0, -1.1, 1.6]])
-    expected = np.array([hpr_visible(pts, v, radius_factor=params.hpr_radius_factor) for v in views])
+    expected = np.array([hpr_visible(pts, v, radius_factor=hpr.spot_radius_factor) for v in views])
     np.testing.assert_array_equal(vis, expected.reshape(2, 2, -1).any(axis=1))
+    # an absolute radius replaces both factors
+    vis10 = SP.spot_visibility(pts, box.face_normals[fi], spots, params, Visibility("hpr", radius=10.0))
+    expected10 = np.array([hpr_visible(pts, v, radius=10.0) for v in views])
+    np.testing.assert_array_equal(vis10, expected10.reshape(2, 2, -1).any(axis=1))
 
 
 def test_spot_visibility_defaults_to_exact_ray_casting_with_back_faces(box):
     from mavac.vision.visibility import VisibilityScene
 
-    assert SpotParams().visibility == "raycast"
+    assert InspectionParams().visibility.method == "raycast"
     pts, fi = trimesh.sample.sample_surface_even(box, 800, seed=3)
     nrm = box.face_normals[fi]
     spot = np.array([[0.0, -1.1, 0.0]])
-    vis = SP.spot_visibility(pts, nrm, spot, SpotParams(view_heights=(1.6,)), vis_scene=VisibilityScene(box))[0]
+    vis = SP.spot_visibility(pts, nrm, spot, SpotParams(view_heights=(1.6,)), InspectionParams().visibility,
+                             vis_scene=VisibilityScene(box))[0]
     assert vis.any() and not vis[np.einsum("ij,ij->i", nrm, np.array([0.0, -1.1, 1.6]) - pts) <= 0].any()
     np.testing.assert_array_equal(vis, (nrm[:, 1] < -0.9) | (nrm[:, 2] > 0.9))  # front face and top
 
@@ -144,14 +150,16 @@ def test_select_spots_is_the_greedy_choice():
 def test_bad_input():
     with pytest.raises(ValueError, match="footprint"):
         SP.candidate_spots(RECT[:2], SpotParams(), np.random.default_rng(0))
-    with pytest.raises(ValueError, match="visibility"):
-        SpotParams(view_heights=(1.0,), visibility="exact")
-    with pytest.raises(ValueError, match="vis_scene"):
+    with pytest.raises(ValueError, match="scene"):
         SP.spot_visibility(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((1, 3)),
-                           SpotParams(view_heights=(1.0,), visibility="raycast"))
+                           SpotParams(view_heights=(1.0,)), Visibility("raycast"))
+    with pytest.raises(TypeError, match="visibility"):
+        SP.spot_visibility(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((1, 3)), SpotParams(), "raycast")
+    with pytest.raises(ValueError, match="standoff"):
+        SP.reachable_sets(None, np.zeros((1, 3)), np.zeros((4, 3)), np.zeros((4, 3)), 0.0)
     with pytest.raises(ValueError, match="jitter_theta"):
         SpotParams(jitter_theta=4.0)
     with pytest.raises(ValueError, match="heading_offsets"):
         SpotParams(heading_offsets=())
-    with pytest.raises(ValueError, match="hpr_radius_factor"):
-        SpotParams(hpr_radius_factor=1.0)
+    with pytest.raises(ValueError, match="spot_radius_factor"):
+        Visibility(spot_radius_factor=1.0)

@@ -4,15 +4,21 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.params import CameraParams
+from mavac.params import VISIBILITY_METHODS, CameraParams
 from mavac.vision.camera import camera_pose_looking_at, fov_masks
 from mavac.vision.visibility import (
+    Visibility,
     VisibilityScene,
     hpr_error_rates,
     hpr_visible,
     raycast_visible,
+    visible_each,
     visible_from,
+    visible_points,
 )
+
+HPR = Visibility("hpr")
+RAYCAST = Visibility("raycast")
 
 
 @pytest.fixture(scope="module")
@@ -86,10 +92,10 @@ def test_visible_from_raycast_with_camera_pose(walled_box):
     T = camera_pose_looking_at([0.5, 0.0, 0.0], [1.0, 0.0, 0.0], 1.5)
     pts = np.vstack([FRONT_VISIBLE, FRONT_HIDDEN, BACK])
     normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
-    vis = visible_from(pts, normals, T, cam, method="raycast", mesh=walled_box)
+    vis = visible_from(pts, normals, T, cam, RAYCAST, scene=walled_box)
     np.testing.assert_array_equal(vis[0], [True, True, False, False, False])
     # With a short detection limit nothing is in the FOV, hence nothing visible.
-    short = visible_from(pts, normals, T, CameraParams(L_d=0.5), method="raycast", mesh=walled_box)
+    short = visible_from(pts, normals, T, CameraParams(L_d=0.5), RAYCAST, scene=walled_box)
     assert not short.any()
 
 
@@ -113,7 +119,7 @@ def test_hpr_error_rates_on_sphere(sphere_sample):
     dirs /= np.linalg.norm(dirs, axis=1)[:, None]
     T = np.array([camera_pose_looking_at(0.3 * d, d, 0.7) for d in dirs])
     for hpr_input in ("surface", "fov"):
-        r = hpr_error_rates(mesh, pts, normals, T, cam, hpr_input=hpr_input)
+        r = hpr_error_rates(mesh, pts, normals, T, cam, visibility=Visibility("hpr", hpr_input=hpr_input))
         assert 0.0 <= r["false_visible"] <= 1.0 and 0.0 <= r["false_hidden"] <= 1.0
         assert r["false_visible"] < 0.2 and r["false_hidden"] < 0.05
         assert r["n_in_fov"] == r["n_ray_visible"] + r["n_ray_hidden"] == 5 * len(pts)
@@ -129,9 +135,9 @@ def test_visible_from_is_inside_fov_and_matches_raycast_on_sphere(sphere_sample)
     T = np.array([camera_pose_looking_at(pts[i], normals[i], cam.L_d) for i in idx])
     fov = fov_masks(pts, T, cam)
     scene = VisibilityScene(mesh)
-    ray = visible_from(pts, normals, T, cam, method="raycast", mesh=scene)
+    ray = visible_from(pts, normals, T, cam, RAYCAST, scene=scene)
     for hpr_input in ("surface", "fov"):
-        hpr = visible_from(pts, normals, T, cam, method="hpr", hpr_input=hpr_input)
+        hpr = visible_from(pts, normals, T, cam, Visibility("hpr", hpr_input=hpr_input))
         assert hpr.shape == (3, len(pts)) and not (hpr & ~fov).any()
         np.testing.assert_array_equal(hpr[np.arange(3), idx], True)  # targets are seen
     assert not (ray & ~fov).any()
@@ -156,12 +162,10 @@ def test_bad_input_is_refused(walled_box):
         hpr_visible(pts, VIEWPOINT, radius_factor=1.0)
     with pytest.raises(ValueError, match="viewpoint"):
         hpr_visible(pts, [[0, 0, 0], [1, 1, 1]])
-    with pytest.raises(ValueError, match="method"):
-        visible_from(pts, None, np.eye(4), CameraParams(), method="zbuffer")
-    with pytest.raises(ValueError, match="mesh"):
-        visible_from(pts, None, np.eye(4), CameraParams(), method="raycast")
-    with pytest.raises(ValueError, match="hpr_input"):
-        visible_from(pts, None, np.eye(4), CameraParams(), hpr_input="all")
+    with pytest.raises(ValueError, match="scene"):
+        visible_from(pts, None, np.eye(4), CameraParams(), RAYCAST)
+    with pytest.raises(TypeError, match="visibility"):
+        visible_from(pts, None, np.eye(4), CameraParams(), "hpr")
     with pytest.raises(ValueError, match="normals"):
         raycast_visible(walled_box, pts, np.zeros((3, 3)), VIEWPOINT)
     with pytest.raises(ValueError, match="mesh"):
@@ -178,13 +182,90 @@ def test_hpr_input_choice_on_a_concave_scene():
     T = camera_pose_looking_at([0.25, 0.0, 0.5], [-0.3, 0.0, 1.0], 0.6)
     cam = CameraParams()
     fov = fov_masks(pts, T, cam)[0]
-    surface = visible_from(pts, None, T, cam, hpr_input="surface")[0]
-    cropped = visible_from(pts, None, T, cam, hpr_input="fov")[0]
+    surface = visible_from(pts, None, T, cam, HPR)[0]
+    cropped = visible_from(pts, None, T, cam, Visibility("hpr", hpr_input="fov"))[0]
     # "surface": HPR of the whole sample from the camera, intersected with the FOV
-    np.testing.assert_array_equal(surface, fov & hpr_visible(pts, T[:3, 3], radius_factor=cam.hpr_radius_factor))
+    np.testing.assert_array_equal(surface, fov & hpr_visible(pts, T[:3, 3], radius_factor=HPR.radius_factor))
     # "fov": HPR of the in-FOV points alone
     idx = np.flatnonzero(fov)
     expected = np.zeros(len(pts), dtype=bool)
-    expected[idx] = hpr_visible(pts[idx], T[:3, 3], radius_factor=cam.hpr_radius_factor)
+    expected[idx] = hpr_visible(pts[idx], T[:3, 3], radius_factor=HPR.radius_factor)
     np.testing.assert_array_equal(cropped, expected)
     assert fov.sum() > 100 and np.any(surface != cropped)
+
+
+# ---- Visibility: one value for the method and HPR's radius ----
+
+
+def test_visibility_defaults_and_the_one_list_of_methods():
+    v = Visibility()
+    assert v.method == "raycast" and v.radius is None and v.hpr_input == "surface"
+    assert (v.radius_factor, v.spot_radius_factor) == (10.0, 30.0)
+    assert set(VISIBILITY_METHODS) == {"hpr", "raycast"}
+    assert v.at_spots().radius_factor == 30.0 and v.at_spots().spot_radius_factor == 30.0
+    assert Visibility("hpr", radius=10.0).at_spots().radius == 10.0  # an absolute radius holds everywhere
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(method="zbuffer"), "method"), (dict(radius_factor=1.0), "radius_factor"),
+    (dict(spot_radius_factor=0.5), "spot_radius_factor"), (dict(radius=0.0), "radius"),
+    (dict(radius=-10.0), "radius"), (dict(hpr_input="all"), "hpr_input"),
+])
+def test_visibility_bad_values_name_the_field(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        Visibility(**kwargs)
+
+
+def test_visibility_bad_types_are_type_errors():
+    with pytest.raises(TypeError, match="radius"):
+        Visibility("hpr", radius="10")
+    with pytest.raises(TypeError, match="method"):
+        Visibility(3)
+
+
+def test_visible_dispatches_to_hpr_and_raycast(walled_box):
+    pts = np.vstack([FRONT_VISIBLE, FRONT_HIDDEN, BACK])
+    normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
+    ray = RAYCAST.visible(pts, normals, VIEWPOINT[None], scene=walled_box)
+    np.testing.assert_array_equal(ray, raycast_visible(walled_box, pts, normals, VIEWPOINT))
+    hpr = HPR.visible(pts, normals, VIEWPOINT[None])
+    np.testing.assert_array_equal(hpr[0], hpr_visible(pts, VIEWPOINT))
+    assert visible_points(HPR, pts, None, VIEWPOINT[None]).shape == (1, len(pts))
+    with pytest.raises(ValueError, match="scene"):
+        RAYCAST.visible(pts, normals, VIEWPOINT[None])
+    with pytest.raises(ValueError, match="candidates"):
+        HPR.visible(pts, None, VIEWPOINT[None], candidates=np.ones((2, len(pts)), bool))
+
+
+def test_absolute_hpr_radius_differs_from_a_factor():
+    """R = 10 m is a different classifier from R = 10 x the farthest distance: with the smaller
+    radius HPR hides more points of a bumpy surface, and it matches hpr_visible's radius keyword."""
+    rng = np.random.default_rng(3)
+    xy = rng.uniform(-1.0, 1.0, size=(3000, 2))
+    pts = np.c_[xy, 0.15 * np.sin(6 * xy[:, 0]) * np.cos(5 * xy[:, 1])]
+    view = np.array([[0.0, 0.0, 1.0]])
+    factor = Visibility("hpr", radius_factor=100.0).visible(pts, None, view)[0]
+    absolute = Visibility("hpr", radius=2.0).visible(pts, None, view)[0]
+    assert factor.sum() > absolute.sum() > 0
+    np.testing.assert_array_equal(absolute, hpr_visible(pts, view[0], radius=2.0))
+    max_distance = np.linalg.norm(pts - view, axis=1).max()
+    assert Visibility("hpr", radius=2.0).hpr_radius(max_distance) == 2.0
+    assert Visibility("hpr").hpr_radius(max_distance) == pytest.approx(10.0 * max_distance)
+
+
+def test_absolute_radius_must_exceed_the_farthest_point():
+    pts = np.array([[5.0, 0, 0], [0, 5.0, 0], [0, 0, 5.0], [3.0, 3.0, 3.0]])
+    with pytest.raises(ValueError, match="radius"):
+        Visibility("hpr", radius=1.0).visible(pts, None, np.zeros((1, 3)))
+
+
+def test_visible_each_is_the_diagonal_of_visible(walled_box):
+    pts = np.vstack([FRONT_VISIBLE, FRONT_HIDDEN, BACK])
+    normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
+    views = np.tile(VIEWPOINT, (len(pts), 1)) + 0.01 * np.arange(len(pts))[:, None]
+    for vis in (HPR, RAYCAST):
+        full = vis.visible(pts, normals, views, scene=walled_box)
+        np.testing.assert_array_equal(vis.visible_each(pts, normals, views, scene=walled_box), np.diag(full))
+        np.testing.assert_array_equal(visible_each(vis, pts, normals, views, scene=walled_box), np.diag(full))
+    with pytest.raises(ValueError, match="viewpoints"):
+        HPR.visible_each(pts, None, views[:2])

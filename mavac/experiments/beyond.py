@@ -31,7 +31,7 @@ from ..geometry.machines import MACHINE_NAMES, load_machine
 from ..geometry.parts import load_part
 from ..inspection.guards import guard_visibility
 from ..parallel import map_trials
-from ..params import InspectionParams, ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
+from ..params import VISIBILITY_METHODS, InspectionParams, ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
 from ..planning.iess import n_repeat_recommended, p_find_min_cover, row_bitsets
 from ..planning.setcover import brute_force_setup_cover, dfbnb_setup_cover, milp_setup_cover
 from ..validate import check_cover, check_int
@@ -383,7 +383,7 @@ def _visibility_plan_trial(args) -> list[dict]:
     machine, seed, params = args
     rows = []
     vis_scene = VisibilityScene(load_machine(machine).mesh)
-    for method in ("hpr", "raycast"):
+    for method in VISIBILITY_METHODS:
         with warnings.catch_warnings():  # the low-coverage warning repeats C, which the row has
             warnings.simplefilter("ignore", UserWarning)
             plan = plan_machine(machine, dataclasses.replace(params, seed=seed).with_visibility(method))
@@ -393,7 +393,7 @@ def _visibility_plan_trial(args) -> list[dict]:
 
 def _plan_row(plan, seed: int, vis_scene) -> dict:
     """C as the plan counts it, and C of the same camera poses under exact ray casting."""
-    exact = dataclasses.replace(plan.params.guard, visibility="raycast")
+    exact = dataclasses.replace(plan.params.visibility, method="raycast")
     seen = guard_visibility(plan.world_T_camera, plan.points, plan.normals, plan.params.camera, exact,
                             vis_scene=vis_scene).any(axis=0) if len(plan.poses) else np.zeros(len(plan.points), bool)
     counted = plan.observed

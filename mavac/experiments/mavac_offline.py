@@ -21,10 +21,11 @@ from ..inspection.plan import guards_at_spots, plan_from_context, plan_inspectio
 from ..inspection.spots import candidate_spots, select_spots, spot_viewpoints
 from ..paper import paper_scalar, paper_table, paper_values
 from ..parallel import map_trials
-from ..params import CameraParams, GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams
+from ..params import (VISIBILITY_METHODS, GuardParams, InspectionParams, NoSParams, ReachabilityMapParams,
+                      SpotParams, Visibility)
 from ..robots.kinematics import JOINT_LIMIT_K, joint_limit_penalty, maneuverability, manipulability_ratio
 from ..vision.camera import fov_pyramid_lines
-from ..vision.visibility import VisibilityScene, classification_rates, hpr_error_rates, hpr_visible
+from ..vision.visibility import VisibilityScene, classification_rates, hpr_error_rates
 from ..viz.plots import plot_mesh, set_equal_3d
 
 #: MAVAC, Table 1: the P_s values of the paper.
@@ -37,9 +38,9 @@ FIG6_P_G = (0.01, 0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.40)
 FIG6_P_S = 0.15
 #: Spherical-flipping radius factors of the HPR sensitivity studies (ours): from just above the
 #: farthest point (Katz et al. need > 1) past Open3D's tutorial value 100 to 1000, where HPR
-#: keeps nearly everything. Our defaults were chosen from these sweeps: 10 for guard views
-#: (:class:`mavac.params.CameraParams`, notebook 03) and the spot factor
-#: (:class:`mavac.params.SpotParams`, notebook 02).
+#: keeps nearly everything. Our defaults were chosen from these sweeps:
+#: ``Visibility.radius_factor`` for guard views (notebook 03) and ``Visibility.spot_radius_factor``
+#: (notebook 02).
 HPR_RADIUS_FACTORS = (1.5, 2.0, 3.0, 5.0, 10.0, 30.0, 100.0, 300.0, 1000.0)
 
 
@@ -63,8 +64,6 @@ def _with(params: InspectionParams, seed=None, P_s=None, P_g=None) -> Inspection
 # --------------------------------------------------------------------------------------------
 # Table 1: spots, C and O against P_s
 
-#: Visibility methods Table 1 is reported with: MAVAC's HPR and exact ray casting, side by side.
-VISIBILITY_METHODS = ("hpr", "raycast")
 
 
 def _table1_trial(args) -> list[dict]:
@@ -74,8 +73,8 @@ def _table1_trial(args) -> list[dict]:
     ctx = prepare_offline(load_machine(machine), params=_with(params, seed=seed))
     rows = []
     for method in methods:
-        spot = dataclasses.replace(params.spot, visibility=method)
-        accessible = ctx.accessible if spot == ctx.params.spot else ctx.accessible_with(spot)
+        vis = dataclasses.replace(ctx.params.visibility, method=method)
+        accessible = ctx.accessible if vis == ctx.params.visibility else ctx.accessible_with(vis)
         for P_s in P_s_values:
             sel = select_spots(accessible, ctx.candidates, P_s)
             rows.append(dict(machine=machine, visibility=method, seed=seed, P_s=P_s, spots=len(sel.greedy.selected),
@@ -92,7 +91,7 @@ def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: in
     Parameters
     ----------
     visibility : sequence of {"hpr", "raycast"}
-        Spot-visibility methods to report (``params.spot`` otherwise: view heights, HPR radius).
+        Visibility methods to report (``params.visibility`` otherwise: HPR radius, input set).
 
     Returns
     -------
@@ -103,8 +102,9 @@ def table1_trials(*, machines=("test_bench",), P_s_values=TABLE1_P_S, trials: in
     """
     params = InspectionParams() if params is None else params
     methods = tuple(visibility)
-    for m in methods:
-        SpotParams(visibility=m)  # fail before the expensive preparation
+    for m in methods:  # fail before the expensive preparation
+        if m not in VISIBILITY_METHODS:
+            raise ValueError(f"visibility must hold methods of {VISIBILITY_METHODS}, got {m!r}")
     items = [(m, seed0 + t, tuple(P_s_values), methods, params) for m in machines for t in range(trials)]
     out = map_trials(_table1_trial, items, n_jobs=n_jobs, desc="Table 1 trials")
     return pd.DataFrame([r for rows in out for r in rows])
@@ -159,7 +159,7 @@ def _spot_hpr_trial(args) -> list[dict]:
     ray = VisibilityScene(m.mesh).visible(surf.points, surf.normals, views)
     rows = []
     for f in factors:
-        hpr = np.array([hpr_visible(surf.points, v, radius_factor=f) for v in views])
+        hpr = Visibility("hpr", radius_factor=f).visible(surf.points, None, views)
         r = classification_rates(hpr, ray)
         rows.append(dict(machine=machine, radius_factor=f, viewpoints=len(views), pairs=r["n_scored"],
                          hpr_false_visible=r["false_visible"], hpr_false_hidden=r["false_hidden"],
@@ -184,7 +184,7 @@ def spot_hpr_radius_sweep(*, machines=MACHINE_NAMES, factors=HPR_RADIUS_FACTORS,
     params = InspectionParams() if params is None else params
     factors = tuple(float(f) for f in factors)
     for f in factors:  # fail before the expensive part
-        SpotParams(hpr_radius_factor=f)
+        Visibility(spot_radius_factor=f)
     out = map_trials(_spot_hpr_trial, [(m, factors, params) for m in machines], n_jobs=n_jobs,
                      desc="HPR radius at spots")
     return pd.DataFrame([r for rows in out for r in rows])
@@ -211,7 +211,7 @@ def _guard_sweep_trial(args) -> list[dict]:
         plan = plan_from_context(ctx, _with(base, P_g=P_g))
         nos = plan.pose_kind == "nos"
         C_nos, O_nos = coverage_overlap(plan.visible[nos], len(plan.points))
-        rows.append(dict(machine=machine, visibility=plan.params.visibility, seed=seed, P_g=P_g, spots=plan.n_spots,
+        rows.append(dict(machine=machine, visibility=plan.visibility, seed=seed, P_g=P_g, spots=plan.n_spots,
                          guards=plan.n_guards,
                          C_guards=plan.C_guards, O_guards=plan.O_guards, nos_clusters=len(plan.nos_clusters),
                          nos_attempts=len(plan.nos_attempts), nos_guards=plan.n_nos_guards, C_nos=C_nos,
@@ -314,7 +314,7 @@ def _k1_trial(args) -> list[dict]:
             selections = guards_at_spots(ctx, spot_rows, guard, maneuverability=weight)
             visible = np.vstack([sel.visible for sel in selections])
             C, O = coverage_overlap(visible, len(ctx.points))
-            rows.append(dict(machine=machine, visibility=ctx.params.guard.visibility, seed=seed, maneuverability=name,
+            rows.append(dict(machine=machine, visibility=ctx.params.visibility.method, seed=seed, maneuverability=name,
                              k1=k1, k2=guard.k2, P_g=guard.P_g, guards=len(visible), C_guards=C, O_guards=O))
     return rows
 
@@ -375,7 +375,7 @@ def _visibility_trial(args) -> dict:
     machine, n_poses, P_s, params = args
     ctx, poses = _guard_poses(machine, n_poses, P_s, params)
     res = hpr_error_rates(ctx.machine.mesh, ctx.points, ctx.normals, poses, params.camera,
-                          hpr_input=params.guard.hpr_input)
+                          visibility=params.visibility)
     return dict(machine=machine, poses=res["n_poses"], hpr_false_visible=res["false_visible"],
                 hpr_false_hidden=res["false_hidden"], hpr_seconds=res["hpr_seconds"],
                 raycast_seconds=res["raycast_seconds"], in_fov_pairs=res["n_in_fov"],
@@ -401,9 +401,8 @@ def _hpr_radius_trial(args) -> list[dict]:
     ctx, poses = _guard_poses(machine, n_poses, P_s, params)
     rows = []
     for f in factors:
-        camera = dataclasses.replace(params.camera, hpr_radius_factor=f)
-        res = hpr_error_rates(ctx.machine.mesh, ctx.points, ctx.normals, poses, camera,
-                              hpr_input=params.guard.hpr_input)
+        vis = dataclasses.replace(params.visibility, radius_factor=f, radius=None)
+        res = hpr_error_rates(ctx.machine.mesh, ctx.points, ctx.normals, poses, params.camera, visibility=vis)
         rows.append(dict(machine=machine, radius_factor=f, poses=res["n_poses"], in_fov_pairs=res["n_in_fov"],
                          hpr_false_visible=res["false_visible"], hpr_false_hidden=res["false_hidden"],
                          agreement=res["agreement"]))
@@ -423,7 +422,7 @@ def hpr_radius_sweep(*, machines=("test_bench", "sanding_machine", "milling_mach
     ----------
     machines : sequence of str
     factors : sequence of float, each > 1
-        ``CameraParams.hpr_radius_factor`` values.
+        ``Visibility.radius_factor`` values.
     n_poses : int
         Guard poses per machine (at most).
     P_s : float
@@ -440,7 +439,7 @@ def hpr_radius_sweep(*, machines=("test_bench", "sanding_machine", "milling_mach
     params = InspectionParams() if params is None else params
     factors = tuple(float(f) for f in factors)
     for f in factors:  # fail before the expensive preparation
-        CameraParams(hpr_radius_factor=f)
+        Visibility(radius_factor=f)
     items = [(m, factors, n_poses, P_s, params) for m in machines]
     out = map_trials(_hpr_radius_trial, items, n_jobs=n_jobs, desc="HPR radius sweep")
     return pd.DataFrame([r for rows in out for r in rows])
@@ -475,7 +474,7 @@ def plan_machine(machine: str, params: InspectionParams | None = None, progress:
 def plan_summary(plans) -> pd.DataFrame:
     """One row per plan: the visibility method behind its C and O, |S|, spots, guards, NoS
     guards, C, O (with and without NoS guards)."""
-    return pd.DataFrame([dict(machine=p.machine_name, visibility=p.params.visibility, elements=len(p.points),
+    return pd.DataFrame([dict(machine=p.machine_name, visibility=p.visibility, elements=len(p.points),
                               spots=p.n_spots, guards=p.n_guards, nos_guards=p.n_nos_guards, C=p.C, O=p.O,
                               C_guards=p.C_guards, O_guards=p.O_guards)
                          for p in plans])
@@ -493,7 +492,7 @@ def visibility_side_by_side(summary: pd.DataFrame) -> pd.DataFrame:
 
 def plan_timings(plans) -> pd.DataFrame:
     """Wall time per stage of each plan, s (not written to CSV: it varies from run to run)."""
-    return pd.DataFrame([dict(machine=p.machine_name, visibility=p.params.visibility, **p.timings,
+    return pd.DataFrame([dict(machine=p.machine_name, visibility=p.visibility, **p.timings,
                               total=sum(p.timings.values())) for p in plans])
 
 
@@ -580,11 +579,8 @@ def plot_guard_view(plan, pose: int | None = None):
     i = int(guards[np.argmax(plan.visible[guards].sum(axis=1))]) if pose is None else int(pose)
     fig, ax = _mesh_axes(plan.mesh)
     vis = plan.visible[i]
-    P, viewpoint, method = plan.points, plan.world_T_camera[i, :3, 3], plan.params.guard.visibility
-    if method == "hpr":
-        seen = hpr_visible(P, viewpoint, plan.params.camera.hpr_radius_factor)
-    else:
-        seen = VisibilityScene(plan.mesh).visible(P, plan.normals, viewpoint[None])[0]
+    P, viewpoint, method = plan.points, plan.world_T_camera[i, :3, 3], plan.visibility
+    seen = plan.params.visibility.visible(P, plan.normals, viewpoint[None], scene=plan.mesh)[0]
     out = seen & ~vis
     ax.scatter(*P[~vis & ~out].T, s=1, c="0.6", alpha=0.3)
     ax.scatter(*P[out].T, s=2, c="violet", alpha=0.5, label=f"{method}-visible, outside the FOV ({out.sum()})")
@@ -641,7 +637,7 @@ def plot_spots(ctx, P_s_values=(0.02, 0.15)):
         ax.quiver(s[:, 0], s[:, 1], np.cos(s[:, 2]), np.sin(s[:, 2]), color="tab:blue", scale=12, width=0.008)
         for i, (x, y, _) in enumerate(s):
             ax.annotate(str(i + 1), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
-        visibility = ctx.params.spot.visibility
+        visibility = ctx.params.visibility.method
         ax.set(aspect="equal", xlabel="x [m]", ylabel="y [m]",
                title=f"P_s = {P_s}: {len(s)} spots, C = {sel.C:.2f}, O = {sel.O:.2f} ({visibility})")
 

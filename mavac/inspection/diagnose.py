@@ -4,8 +4,8 @@ After :func:`mavac.inspection.plan.plan_from_context`, each element of S that no
 gets the likely cause, from what the offline pipeline already knows:
 
 * ``too_high``: from no collision-free candidate spot does the camera pose that inspects it (on
-  its normal at ``L_d``, looking back) fall in a reachable cell of the reachability map, and that
-  camera point is above the highest reachable cell of the map;
+  its normal at the guard stand-off, looking back) fall in a reachable cell of the reachability
+  map, and that camera point is above the highest reachable cell of the map;
 * ``too_far``: the same, below that height (beyond the arm's horizontal reach from every spot);
 * ``occluded``: the map reaches its camera pose from some spot, but the machine hides it from
   every camera the plan could place (not visible from the spots, the normal's stand-off blocked,
@@ -47,7 +47,7 @@ def unobserved_causes(ctx, plan, rmap=None) -> np.ndarray:
     todo = np.flatnonzero(~plan.observed) if len(plan.points) == n else np.arange(n)
     if len(todo) == 0:
         return out
-    cam = ctx.points[todo] + ctx.params.camera.L_d * ctx.normals[todo]
+    cam = ctx.points[todo] + ctx.params.guard_standoff * ctx.normals[todo]
     reached = np.zeros(len(todo), dtype=bool)
     for T in se2_matrices(ctx.candidates) if len(ctx.candidates) else []:
         reached |= rmap.is_reachable_from(T, cam, -ctx.normals[todo])

@@ -1,8 +1,9 @@
 """Guard selection: arm configurations that inspect the machine from a spot (MAVAC, "Local
 exploration", "Camera field of view", "Guard selection").
 
-A guard point is placed on each small cluster of surface elements, along its normal at the camera's
-reliable detection limit ``L_d``, with the camera looking back along the normal. A guard
+A guard point is placed on each small cluster of surface elements, along its normal at the guard
+stand-off (the camera's reliable detection limit ``L_d``, as the paper says, unless
+``GuardParams.standoff`` sets another), with the camera looking back along the normal. A guard
 configuration is a collision-free IK solution for that camera pose (the camera may spin freely
 about its optical axis). Its visible set is FOV pyramid + HPR (or exact ray casting), its score is
 eq. 3, ``I_m^k1 x (N / |S|)^k2``, and guards are chosen with the same greedy selection as spots,
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.transforms import check_transform, compose, points_in_frame, vectors_in_frame
-from ..params import CameraParams, GuardParams
+from ..params import CameraParams, GuardParams, Visibility
 from ..planning.greedy import GreedyResult, greedy_select
 from ..robots.kinematics import fk, ik_axis, maneuverability
 from ..validate import check_indices, check_points, check_positive
@@ -157,7 +158,7 @@ def camera_configurations(robot, checker, world_T_base, positions, axes, rng, q0
 
 
 def guard_candidates(robot, checker, world_T_base, points, normals, targets, camera: CameraParams,
-                     rng) -> GuardCandidates:
+                     rng, standoff: float | None = None) -> GuardCandidates:
     """Feasible guards of one spot: batched IK + collision check, and their FOV masks.
 
     Parameters
@@ -172,9 +173,13 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
         Elements to place a guard on (already prefiltered with the reachability map).
     camera : CameraParams
     rng : numpy.random.Generator
+    standoff : float, optional
+        Distance of the camera from its target along the normal, m; default ``camera.L_d``
+        (:attr:`mavac.params.InspectionParams.guard_standoff`).
     """
     targets = check_indices("targets", targets, len(points))
-    positions = points[targets] + camera.L_d * normals[targets]
+    standoff = camera.L_d if standoff is None else check_positive("standoff", standoff)
+    positions = points[targets] + standoff * normals[targets]
     ok, q, n_ik = camera_configurations(robot, checker, world_T_base, positions, -normals[targets], rng)
     q = q[ok]
     n = len(points)
@@ -187,15 +192,15 @@ def guard_candidates(robot, checker, world_T_base, points, normals, targets, cam
                            len(targets), n_ik)
 
 
-def guard_visibility(world_T_cameras, points, normals, camera: CameraParams, params: GuardParams,
+def guard_visibility(world_T_cameras, points, normals, camera: CameraParams, visibility: Visibility,
                      vis_scene=None) -> np.ndarray:
-    """What guards see: FOV pyramid AND (HPR or ray casting), (g, n) bool."""
-    return visible_from(points, normals, world_T_cameras, camera, method=params.visibility,
-                        mesh=vis_scene, hpr_input=params.hpr_input)
+    """What guards see: FOV pyramid AND ``visibility`` (HPR or ray casting), (g, n) bool."""
+    return visible_from(points, normals, world_T_cameras, camera, visibility, scene=vis_scene)
 
 
 def select_guards(candidates: GuardCandidates, points, normals, camera: CameraParams, params: GuardParams,
-                  *, covered=None, vis_scene=None, cache: dict | None = None) -> GuardSelection:
+                  *, visibility: Visibility = Visibility(), covered=None, vis_scene=None,
+                  cache: dict | None = None) -> GuardSelection:
     """The paper's greedy guard selection (eq. 3 score, threshold ``P_g`` x first maximum).
 
     Visibility (HPR or ray casting) is evaluated lazily: the FOV count bounds each candidate's
@@ -208,21 +213,23 @@ def select_guards(candidates: GuardCandidates, points, normals, camera: CameraPa
     points, normals : (n, 3) float
     camera : CameraParams
     params : GuardParams
-        ``P_g``, ``k1``, ``k2``, visibility method.
+        ``P_g``, ``k1``, ``k2``.
+    visibility : Visibility
+        Default: the package's (exact ray casting, needs ``vis_scene``).
     covered : (n,) bool, optional
         Elements already seen by guards chosen at earlier spots: they are no longer new.
     vis_scene : VisibilityScene, optional
-        For ``params.visibility == "raycast"``.
+        For ray casting.
     cache : dict, optional
         Candidate index -> visible row; pass the same dict to reuse evaluations across calls
-        on the same candidates and visibility method (e.g. a P_g sweep).
+        on the same candidates and visibility (e.g. a P_g sweep).
     """
     cache = {} if cache is None else cache
 
     def evaluate(idx):
         todo = [i for i in np.asarray(idx).tolist() if i not in cache]
         if todo:
-            rows = guard_visibility(candidates.world_T_camera[todo], points, normals, camera, params, vis_scene)
+            rows = guard_visibility(candidates.world_T_camera[todo], points, normals, camera, visibility, vis_scene)
             cache.update(zip(todo, rows))
         return np.array([cache[i] for i in np.asarray(idx).tolist()], dtype=bool).reshape(len(idx), len(points))
 

@@ -23,7 +23,7 @@ from scipy.spatial import cKDTree
 from sklearn.cluster import DBSCAN
 
 from ..geometry.transforms import compose, se2_matrices
-from ..params import CameraParams, InspectionParams, NoSParams
+from ..params import InspectionParams, NoSParams
 from ..planning.rrt import plan_rrt_connect
 from ..robots.kinematics import fk
 from ..validate import check_int, check_points, check_positive
@@ -329,12 +329,14 @@ def gateway_rays(gateway: Gateway, max_tries: int) -> np.ndarray:
 
 
 def attempt_nos_guard(cluster: NoSCluster, spot: int, world_T_base, robot, checker, params: NoSParams,
-                      camera: CameraParams, rng: np.random.Generator) -> tuple[dict, np.ndarray | None]:
+                      standoff: float, rng: np.random.Generator) -> tuple[dict, np.ndarray | None]:
     """One NoS guard attempt from a spot: IK on the best gateway's rays, then RRT-Connect.
 
-    The camera sits ``L_d`` out along the first of :func:`gateway_rays` that has a collision-free
-    IK solution, looking back along it; the guard is kept when RRT-Connect finds a path to that
-    configuration from the robot's home configuration (MAVAC, "Non-observed surface").
+    The camera sits ``standoff`` (m; a NoS guard is a guard: the guard stand-off
+    :attr:`mavac.params.InspectionParams.guard_standoff`) out along the first of
+    :func:`gateway_rays` that has a collision-free IK solution, looking back along it; the guard
+    is kept when RRT-Connect finds a path to that configuration from the robot's home
+    configuration (MAVAC, "Non-observed surface").
 
     Returns
     -------
@@ -345,7 +347,7 @@ def attempt_nos_guard(cluster: NoSCluster, spot: int, world_T_base, robot, check
     """
     gw = cluster.best_gateway
     rays = gateway_rays(gw, params.max_ray_tries)
-    ok, q, _ = camera_configurations(robot, checker, world_T_base, cluster.origin + camera.L_d * rays, -rays, rng)
+    ok, q, _ = camera_configurations(robot, checker, world_T_base, cluster.origin + standoff * rays, -rays, rng)
     record = {"cluster": int(cluster.label), "n_elements": int(len(cluster.members)), "spot": int(spot),
               "n_rays": gw.n_rays, "ik": bool(ok.any()), "solved": False, "reason": "no collision-free IK",
               "seconds": 0.0}
@@ -374,7 +376,8 @@ def nos_guards(ctx, spots, observed, params: InspectionParams) -> tuple[list, li
     observed : (n,) bool
         Elements the regular guards cover.
     params : InspectionParams
-        ``nos``, ``camera``, ``guard`` (visibility of a NoS guard), ``surface_spacing``, ``seed``.
+        ``nos``, ``camera``, ``visibility`` and ``guard_standoff`` of a NoS guard, ``surface_spacing``,
+        ``seed``.
 
     Returns
     -------
@@ -395,10 +398,11 @@ def nos_guards(ctx, spots, observed, params: InspectionParams) -> tuple[list, li
             continue
         k = spot_along_direction(spots[:, :2], c.origin, c.best_gateway.direction)
         rng = np.random.default_rng([params.seed, 2, c.label])
-        record, q = attempt_nos_guard(c, k, world_T_bases[k], robot, ctx.checker, params.nos, params.camera, rng)
+        record, q = attempt_nos_guard(c, k, world_T_bases[k], robot, ctx.checker, params.nos,
+                                      params.guard_standoff, rng)
         if q is not None:
             T = compose(world_T_bases[k], fk(robot, q, robot.camera_frame))
-            vis = guard_visibility(T[None], ctx.points, ctx.normals, params.camera, params.guard, ctx.vis_scene)[0]
+            vis = guard_visibility(T[None], ctx.points, ctx.normals, params.camera, params.visibility, ctx.vis_scene)[0]
             guards.append(NoSGuard(k, q, T, vis))
         attempts.append(record)
     return clusters, guards, attempts

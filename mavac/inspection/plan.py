@@ -5,7 +5,8 @@
 1. surface elements S (points + outward normals, the machine's floor contact removed);
 2. candidate spots on rings around the footprint, collision-free; accessible sets (visible AND
    reachable); greedy spot selection with ``P_s``;
-3. per spot, guard candidates (normal at ``L_d``, collision-free IK, FOV + HPR), greedy guard
+3. per spot, guard candidates (on the normal at the guard stand-off, collision-free IK, FOV +
+   ``params.visibility``: HPR or ray casting), greedy guard
    selection with ``P_g`` and eq. 3; elements seen at earlier spots no longer count as new;
 4. coverage C and overlap O (eq. 1-2);
 5. non-observed surfaces: DBSCAN clusters, ray fans, gateways, NoS guards kept only if OMPL
@@ -243,8 +244,8 @@ class InspectionPlan:
 
     @property
     def visibility(self) -> str:
-        """Visibility method behind C and O: ``"raycast"``, ``"hpr"``, or both named per stage."""
-        return self.params.visibility
+        """Visibility method behind C and O, ``"raycast"`` or ``"hpr"`` (``params.visibility.method``)."""
+        return self.params.visibility.method
 
     def summary(self) -> str:
         """A few lines a person can read; every coverage names its visibility method."""
@@ -374,12 +375,11 @@ class OfflineContext:
     _guards: dict = field(default_factory=dict, repr=False)
     _visibility: dict = field(default_factory=dict, repr=False)
 
-    def accessible_with(self, spot_params) -> np.ndarray:
-        """Accessible sets (m, n) bool of the candidates under other spot-visibility settings
-        (``visibility``, ``hpr_radius_factor``, ``view_heights`` of ``spot_params``), e.g. Table 1
-        with HPR and with ray casting from one context."""
-        return self.reachable & _spot_visibility(self.points, self.normals, self.candidates, spot_params,
-                                                 self.vis_scene)
+    def accessible_with(self, visibility) -> np.ndarray:
+        """Accessible sets (m, n) bool of the candidates under another :class:`~mavac.params.Visibility`,
+        e.g. Table 1 with HPR and with ray casting from one context."""
+        return self.reachable & _spot_visibility(self.points, self.normals, self.candidates, self.params.spot,
+                                                 visibility, self.vis_scene)
 
     def guard_candidates(self, row: int):
         """Feasible guard candidates of candidate spot ``row`` (computed once, then cached).
@@ -392,7 +392,8 @@ class OfflineContext:
             rng = np.random.default_rng([self.params.seed, 1, row])
             T = se2_matrices(self.candidates[row:row + 1])[0]
             self._guards[row] = G.guard_candidates(self.robot, self.checker, T, self.points, self.normals,
-                                                   self.targets[acc], self.params.camera, rng)
+                                                   self.targets[acc], self.params.camera, rng,
+                                                   standoff=self.params.guard_standoff)
         return self._guards[row]
 
     def select_guards(self, row: int, guard_params, covered, *, maneuverability=None):
@@ -401,26 +402,27 @@ class OfflineContext:
         ``maneuverability``, a function of the configurations ``(g, nq) -> (g,)``, replaces the
         candidates' I_m in eq. 3 (e.g. one factor of it); default: their I_m.
         """
-        cache = self._visibility.setdefault((row, guard_params.visibility, guard_params.hpr_input), {})
+        cache = self._visibility.setdefault(row, {})  # one visibility per context
         cands = self.guard_candidates(row)
         if maneuverability is not None and len(cands):
             cands = dataclasses.replace(cands, maneuverability=np.asarray(maneuverability(cands.q), dtype=float))
-        return G.select_guards(cands, self.points, self.normals, self.params.camera,
-                               guard_params, covered=covered, vis_scene=self.vis_scene, cache=cache)
+        return G.select_guards(cands, self.points, self.normals, self.params.camera, guard_params,
+                               visibility=self.params.visibility, covered=covered, vis_scene=self.vis_scene,
+                               cache=cache)
 
 
 def _accessible_candidates(machine, robot, rmap, points, normals, params: InspectionParams, vis_scene):
     """Collision-free candidate spots (m, 3), their reachable sets and accessible sets (m, n) bool."""
     cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
     cands = cands[SP.collision_free_spots(robot, machine.mesh, cands, margin=params.guard.collision_margin)]
-    reach = SP.reachable_sets(rmap, cands, points, normals, params.camera)
-    return cands, reach, reach & _spot_visibility(points, normals, cands, params.spot, vis_scene)
+    reach = SP.reachable_sets(rmap, cands, points, normals, params.guard_standoff)
+    return cands, reach, reach & _spot_visibility(points, normals, cands, params.spot, params.visibility, vis_scene)
 
 
-def _spot_visibility(points, normals, cands, spot_params, vis_scene) -> np.ndarray:
+def _spot_visibility(points, normals, cands, spot_params, visibility, vis_scene) -> np.ndarray:
     if not len(cands):
         return np.zeros((0, len(points)), dtype=bool)
-    return SP.spot_visibility(points, normals, cands, spot_params, vis_scene=vis_scene)
+    return SP.spot_visibility(points, normals, cands, spot_params, visibility, vis_scene=vis_scene)
 
 
 def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | None = None,
@@ -453,7 +455,7 @@ def prepare_offline(mesh_or_machine, *, robot=None, params: InspectionParams | N
     with _timed(timings, "accessible_sets"):
         cands, reach, acc = _accessible_candidates(machine, robot, rmap, P, N, params, vis_scene)
     scene = raycasting_scene(machine.mesh)
-    clear = SP.guard_clearance(scene, P, N, params.camera.L_d)
+    clear = SP.guard_clearance(scene, P, N, params.guard_standoff)
     checker = CollisionChecker(robot, machine.mesh, margin=params.guard.collision_margin, floor=True)
     targets = G.guard_targets(P, N, params.guard.guard_spacing)
     return OfflineContext(machine, robot, params, P, N, cands, acc, clear, targets, scene, vis_scene,
@@ -474,8 +476,7 @@ def _sweep_params(ctx: OfflineContext, params: InspectionParams | None) -> Inspe
         raise ValueError(f"params must be an InspectionParams, got {type(params).__name__}")
     g0 = ctx.params.guard
     geometry = dataclasses.replace(params, spot=dataclasses.replace(params.spot, P_s=ctx.params.spot.P_s),
-                                   guard=dataclasses.replace(params.guard, P_g=g0.P_g, k1=g0.k1, k2=g0.k2,
-                                                             visibility=g0.visibility, hpr_input=g0.hpr_input),
+                                   guard=dataclasses.replace(params.guard, P_g=g0.P_g, k1=g0.k1, k2=g0.k2),
                                    nos=ctx.params.nos)
     if geometry != ctx.params:
         raise ValueError("params differ from the context's in more than spot.P_s, guard selection and nos: "
@@ -552,7 +553,7 @@ def plan_from_context(ctx: OfflineContext, params: InspectionParams | None = Non
     ctx : OfflineContext
         From :func:`prepare_offline`.
     params : InspectionParams, optional
-        Only ``spot.P_s``, ``guard`` (``P_g``, ``k1``, ``k2``, visibility) and ``nos`` are read;
+        Only ``spot.P_s``, ``guard`` (``P_g``, ``k1``, ``k2``) and ``nos`` are read;
         the rest must equal ``ctx.params`` (else ``ValueError``). Default ``ctx.params``.
     progress : bool
         tqdm progress over the spots.
@@ -591,7 +592,7 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
     params : InspectionParams, optional
         Paper defaults (P_s = 0.02, P_g = 0.15, k1 = k2 = 1), with exact ray casting (and a
         back-face test) for visibility; ``InspectionParams().with_visibility("hpr")`` selects the
-        paper's hidden point removal.
+        paper's hidden point removal (``params.visibility``, one choice for every stage).
     rmap : ReachabilityMap, optional
         Reuse a map (default: built or loaded from the disk cache for ``robot``/``params.reach``).
     progress : bool

@@ -5,13 +5,14 @@ the workpiece surface, solves IK for each, scores every solution with an evaluat
 (manipulability, for instance) and shows the per-target score as a heat map. Here:
 
 * targets: the surface elements S, each inspected the MAVAC way: the camera on the element's
-  normal at the detection limit ``L_d``, looking back at it (MAVAC, "Local exploration");
+  normal at the guard stand-off (the detection limit ``L_d`` unless ``GuardParams.standoff``),
+  looking back at it (MAVAC, "Local exploration");
 * robot placements: every collision-free candidate spot of the offline pipeline
   (:func:`mavac.inspection.plan.prepare_offline`), the reachability map as a prefilter;
 * IK: collision-free camera IK (:func:`mavac.inspection.guards.camera_configurations`);
 * evaluator: the maneuverability index I_m of the configuration (MAVAC eq. 4, Vahrenkamp et al.),
-  times 1 if the camera actually sees the element from there (ray casting by default, or HPR),
-  else 0.
+  times 1 if the camera actually sees the element from there (``params.visibility``: ray casting
+  by default, or HPR), else 0.
 
 Each element keeps its best score over all spots; 0 means no spot reaches a camera pose that
 sees it. The result goes to a CSV (one row per element) and an HTML heat map with a colour bar
@@ -29,7 +30,6 @@ from tqdm.auto import tqdm
 from ..io import write_csv
 from ..params import InspectionParams
 from ..robots.kinematics import maneuverability
-from ..vision.visibility import hpr_visible
 from ..viz.scenes import reach_study_html
 from .guards import camera_configurations
 from .plan import prepare_offline
@@ -125,23 +125,21 @@ class ReachStudy:
         return reach_study_html(self, path, robot=robot)
 
 
-def seen_from_camera_pose(ctx, method: str) -> np.ndarray:
-    """Whether each element is seen from its own camera pose (normal at ``L_d``), (n,) bool.
-
-    ``"raycast"``: nothing of the machine (or the floor) on the segment; ``"hpr"``: HPR over S from
-    that viewpoint keeps it (one HPR per element).
+def seen_from_camera_pose(ctx) -> np.ndarray:
+    """Whether each element is seen from its own camera pose (normal at the guard stand-off),
+    (n,) bool, by ``ctx.params.visibility``: ray casting (nothing of the machine or the floor on
+    the segment) or HPR over S from that viewpoint (one HPR per element).
     """
-    cam = ctx.points + ctx.params.camera.L_d * ctx.normals
-    if method == "raycast":
-        return ctx.vis_scene.unoccluded(cam, ctx.points) & ctx.clear
-    if method == "hpr":
-        f = ctx.params.camera.hpr_radius_factor
-        return np.array([hpr_visible(ctx.points, c, f)[i] for i, c in enumerate(cam)], dtype=bool)
-    raise ValueError(f"visibility must be 'raycast' or 'hpr', got {method!r}")
+    vis = ctx.params.visibility
+    cam = ctx.points + ctx.params.guard_standoff * ctx.normals
+    seen = vis.visible_each(ctx.points, ctx.normals, cam, scene=ctx.vis_scene)
+    # The mesh scene has no floor; exact visibility adds it (the guard clearance). HPR is
+    # position-only over S, as in the paper.
+    return seen & ctx.clear if vis.method == "raycast" else seen
 
 
 def reach_study(mesh_or_machine, robot=None, params: InspectionParams | None = None, *,
-                visibility: str = "raycast", rmap=None, progress: bool = False) -> ReachStudy:
+                rmap=None, progress: bool = False) -> ReachStudy:
     """Best reach-and-visibility score of every surface element over the candidate spots.
 
     Parameters
@@ -151,25 +149,22 @@ def reach_study(mesh_or_machine, robot=None, params: InspectionParams | None = N
     robot : RobotModel, optional
         Default :func:`mavac.robots.models.ur10_mobile`.
     params : InspectionParams, optional
-        Surface spacing, camera (``L_d``), spot candidates, reachability map, seed.
-    visibility : {"raycast", "hpr"}
-        How "the camera sees the element" is decided (ray casting is exact).
+        Surface spacing, guard stand-off, spot candidates, reachability map, seed, and
+        ``visibility``: how "the camera sees the element" is decided (ray casting is exact).
     rmap : ReachabilityMap, optional
     progress : bool
         tqdm progress over the spots.
     """
-    if visibility not in ("raycast", "hpr"):
-        raise ValueError(f"visibility must be 'raycast' or 'hpr', got {visibility!r}")
     t0 = time.perf_counter()
     ctx = prepare_offline(mesh_or_machine, robot=robot, params=params, rmap=rmap)
     rmap = reachability_map(ctx.robot, ctx.params.reach) if rmap is None else rmap
     timings = {"prepare": time.perf_counter() - t0}
     P, N = ctx.points, ctx.normals
     n, nq = len(P), ctx.robot.nq
-    cam = P + ctx.params.camera.L_d * N
+    cam = P + ctx.params.guard_standoff * N
 
     t0 = time.perf_counter()
-    visible = seen_from_camera_pose(ctx, visibility)
+    visible = seen_from_camera_pose(ctx)
     timings["visibility"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -196,5 +191,5 @@ def reach_study(mesh_or_machine, robot=None, params: InspectionParams | None = N
         best_q[hit[better]] = q[ok][better]
     timings["ik"] = time.perf_counter() - t0
     best_im = np.maximum(best_im, 0.0)
-    return ReachStudy(ctx.machine.name, ctx.robot.name, visibility, P, N, ctx.candidates, reached, visible,
+    return ReachStudy(ctx.machine.name, ctx.robot.name, ctx.params.visibility.method, P, N, ctx.candidates, reached, visible,
                       best_im, best_im * visible, best_spot, best_q, ctx.params, timings, ctx.machine.mesh)

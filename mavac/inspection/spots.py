@@ -4,8 +4,8 @@ Candidate SE(2) base poses lie on rings around the machine footprint, parked alo
 kept only if the robot in its home configuration is free of collision with the machine there.
 The accessible set of a spot is, as in the paper, the set of surface elements that are
 
-* *reachable*: the camera pose that inspects the element (on its normal at ``L_d``, looking back
-  at it) falls in a reachable cell of the reachability map placed at the spot;
+* *reachable*: the camera pose that inspects the element (on its normal at the guard stand-off,
+  ``L_d`` by default, looking back at it) falls in a reachable cell of the reachability map placed at the spot;
 * *visible* from the spot: seen (HPR, as in the paper, or exact ray casting) from a viewpoint
   above the base at one of ``SpotParams.view_heights``, a stand-in for where the arm holds the
   camera (the arm reaches around the near side of the machine, not through it).
@@ -25,11 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.transforms import se2_matrices
-from ..params import CameraParams, SpotParams
+from ..params import SpotParams, Visibility
 from ..planning.greedy import GreedyResult, greedy_select
 from ..robots.collision import CollisionChecker
-from ..validate import check_points
-from ..vision.visibility import hpr_visible
+from ..validate import check_instance, check_points, check_positive
 from .coverage import coverage_overlap, mean_pairwise_overlap
 from .nos import first_hit_distance
 
@@ -143,7 +142,7 @@ def guard_clearance(scene, points, normals, distance: float, offset: float = 1e-
         Machine plus floor (:func:`mavac.inspection.nos.raycasting_scene`).
     points, normals : (n, 3) float
     distance : float, m
-        Guard stand-off (``L_d``).
+        Guard stand-off (:attr:`mavac.params.InspectionParams.guard_standoff`).
     """
     t = first_hit_distance(scene, points + offset * normals, normals)
     return t >= distance - offset
@@ -156,7 +155,8 @@ def spot_viewpoints(poses, view_heights) -> np.ndarray:
     return np.array([[x, y, h] for x, y, _ in poses for h in view_heights], dtype=float).reshape(-1, 3)
 
 
-def spot_visibility(points, normals, poses, params: SpotParams, *, vis_scene=None) -> np.ndarray:
+def spot_visibility(points, normals, poses, params: SpotParams, visibility: Visibility, *,
+                    vis_scene=None) -> np.ndarray:
     """Elements visible from a viewpoint above each spot, at any of ``params.view_heights``, (m, n) bool.
 
     Parameters
@@ -165,22 +165,18 @@ def spot_visibility(points, normals, poses, params: SpotParams, *, vis_scene=Non
     poses : (m, 3) float
         SE(2) spots.
     params : SpotParams
-        ``view_heights`` (m), ``visibility`` ("raycast": exact, with a back-face test; "hpr":
-        MAVAC's hidden point removal with ``params.hpr_radius_factor``, calibrated at these
-        viewpoints).
+        ``view_heights`` (m).
+    visibility : Visibility
+        Ray casting (exact, with a back-face test) or MAVAC's HPR with the spot radius
+        (:meth:`Visibility.at_spots`: calibrated at these farther viewpoints).
     vis_scene : mavac.vision.visibility.VisibilityScene
-        Required for ``"raycast"``.
+        Required for ray casting.
     """
     poses = check_points("poses", poses)
+    check_instance("visibility", visibility, Visibility)
     heights = params.view_heights
     views = spot_viewpoints(poses, heights)
-    if params.visibility == "raycast":
-        if vis_scene is None:
-            raise ValueError("vis_scene is required for visibility='raycast'")
-        vis = vis_scene.visible(points, normals, views)
-    else:
-        vis = np.array([hpr_visible(points, v, radius_factor=params.hpr_radius_factor) for v in views])
-        vis = vis.reshape(len(views), len(points))
+    vis = visibility.at_spots().visible(points, normals, views, scene=vis_scene)
     return vis.reshape(len(poses), len(heights), len(points)).any(axis=1)
 
 
@@ -215,22 +211,25 @@ class SpotSelection:
         return self.candidates[self.greedy.selected]
 
 
-def reachable_sets(rmap, poses, points, normals, camera: CameraParams) -> np.ndarray:
+def reachable_sets(rmap, poses, points, normals, standoff: float) -> np.ndarray:
     """Elements whose inspecting camera pose the arm reaches from each spot, (m, n) bool.
 
-    The camera inspecting element s sits at ``s + L_d n_s`` with its optical axis along ``-n_s``;
+    The camera inspecting element s sits at ``s + standoff n_s`` (the guard stand-off, m:
+    :attr:`mavac.params.InspectionParams.guard_standoff`) with its optical axis along ``-n_s``;
     the element is reachable when that pose's (voxel, direction) cell of the map is reachable.
     """
-    guard_points = points + camera.L_d * normals
+    check_positive("standoff", standoff)
+    guard_points = points + standoff * normals
     reach = np.zeros((len(poses), len(points)), dtype=bool)
     for i, T in enumerate(se2_matrices(poses)):
         reach[i] = rmap.is_reachable_from(T, guard_points, -normals)
     return reach
 
 
-def accessible_sets(rmap, poses, points, normals, visible, camera: CameraParams) -> np.ndarray:
-    """Accessible = visible AND reachable (map), for each spot, (m, n) bool (MAVAC's definition)."""
-    return reachable_sets(rmap, poses, points, normals, camera) & visible
+def accessible_sets(rmap, poses, points, normals, visible, standoff: float) -> np.ndarray:
+    """Accessible = visible AND reachable (map) with the guard ``standoff`` (m), for each spot,
+    (m, n) bool (MAVAC's definition)."""
+    return reachable_sets(rmap, poses, points, normals, standoff) & visible
 
 
 def select_spots(accessible, candidates, P_s: float) -> SpotSelection:

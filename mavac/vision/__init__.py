@@ -3,8 +3,10 @@
 * :mod:`mavac.vision.camera` -- MAVAC's emulated camera: FOV pyramid test (``fov_mask``,
   ``fov_masks``), guard camera poses (``camera_pose_looking_at``), pyramid edges for plots.
 * :mod:`mavac.vision.visibility` -- hidden point removal (Open3D, Katz et al. 2007), exact
-  visibility by ray casting (Open3D ``RaycastingScene``), their combination with the FOV
-  (``visible_from``) and HPR's error rates against ray casting (``hpr_error_rates``).
+  visibility by ray casting (Open3D ``RaycastingScene``), the choice between them as one value
+  (``Visibility``, defined in :mod:`mavac.params`: method and HPR radius, ``visible(...)``), its
+  combination with the FOV (``visible_from``) and HPR's error rates against ray casting
+  (``hpr_error_rates``).
 * :mod:`mavac.vision.stain` -- stain images, K-means stain masks, C_p and the N_c-colour
   quantisation into passes (Kabir, Sec. VII).
 * :mod:`mavac.vision.rgbd` -- back-projection of RGB-D pixels to 3-D points (pinhole, OpenCV frame).

@@ -23,6 +23,10 @@ What HPR receives (``hpr_input``):
 
 HPR uses positions only (the paper's method); ray casting can also require the point to face
 the camera, ``n . (v - p) > 0``, when normals are given.
+
+The choice between the two, HPR's radius and its input set are one value,
+:class:`mavac.params.Visibility` (also importable from here); :func:`visible_points` is the one
+place that dispatches on it.
 """
 
 from __future__ import annotations
@@ -34,14 +38,15 @@ import trimesh
 
 from ..geometry.mesh import check_mesh
 from ..geometry.transforms import check_transforms
-from ..params import CameraParams
+from ..params import CameraParams, Visibility
 from ..tolerances import RAY_EPS_RELATIVE
-from ..validate import check_points, check_positive, check_range
+from ..validate import check_instance, check_points, check_positive
 from .camera import fov_masks
 
 # Rays per Embree call: 2**20 rays x 6 float32 = 24 MB.
 _RAYS_PER_CALL = 1 << 20
-_HPR_INPUTS = ("surface", "fov")
+__all__ = ["Visibility", "VisibilityScene", "classification_rates", "hpr_error_rates", "hpr_visible",
+           "raycast_visible", "visible_each", "visible_from", "visible_points"]
 
 
 def _point_cloud(points: np.ndarray):
@@ -50,7 +55,7 @@ def _point_cloud(points: np.ndarray):
     return o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
 
 
-def _hpr_on_cloud(pcd, points: np.ndarray, viewpoint: np.ndarray, radius_factor: float) -> np.ndarray:
+def _hpr_on_cloud(pcd, points: np.ndarray, viewpoint: np.ndarray, vis: Visibility) -> np.ndarray:
     """HPR mask over ``points`` (already held by the Open3D cloud ``pcd``)."""
     n = points.shape[0]
     if n == 0:
@@ -63,13 +68,14 @@ def _hpr_on_cloud(pcd, points: np.ndarray, viewpoint: np.ndarray, radius_factor:
     singular = np.linalg.svd(rel, compute_uv=False)
     if len(singular) < 3 or singular[-1] <= 1e-9 * singular[0]:
         return np.ones(n, dtype=bool)
-    _, kept = pcd.hidden_point_removal(viewpoint, radius_factor * max_distance)
+    _, kept = pcd.hidden_point_removal(viewpoint, vis.hpr_radius(max_distance))
     mask = np.zeros(n, dtype=bool)
     mask[np.asarray(kept, dtype=np.int64)] = True
     return mask
 
 
-def hpr_visible(points, viewpoint, radius_factor: float = CameraParams.hpr_radius_factor) -> np.ndarray:
+def hpr_visible(points, viewpoint, radius_factor: float = Visibility.radius_factor, *,
+                radius: float | None = None) -> np.ndarray:
     """Hidden point removal (Katz et al. 2007) with Open3D.
 
     Parameters
@@ -82,6 +88,8 @@ def hpr_visible(points, viewpoint, radius_factor: float = CameraParams.hpr_radiu
         Spherical-flipping radius ``R = radius_factor * max_i |p_i - viewpoint|``; must be > 1.
         Larger R keeps more points (fewer false hidden on convex parts, more false visible
         in concavities).
+    radius : float, optional, metres
+        Absolute R instead (must exceed the farthest point distance).
 
     Returns
     -------
@@ -92,22 +100,22 @@ def hpr_visible(points, viewpoint, radius_factor: float = CameraParams.hpr_radiu
     v = check_points("viewpoint", viewpoint)
     if v.shape[0] != 1:
         raise ValueError(f"viewpoint must have shape (3,), got {np.shape(viewpoint)}")
-    check_range("radius_factor", radius_factor, 1.0, np.inf, lo_open=True)
-    return _hpr_on_cloud(_point_cloud(P), P, v[0], float(radius_factor))
+    vis = Visibility("hpr", radius_factor=radius_factor, radius=radius)
+    return _hpr_on_cloud(_point_cloud(P), P, v[0], vis)
 
 
-def _hpr_in_fov(points, fov, viewpoints, radius_factor, hpr_input) -> np.ndarray:
-    """``fov & HPR`` for every camera; HPR input set as documented in the module."""
-    vis = np.zeros_like(fov)
-    whole = _point_cloud(points) if hpr_input == "surface" else None
+def _hpr_in_fov(points, fov, viewpoints, vis: Visibility) -> np.ndarray:
+    """``fov & HPR`` for every camera; HPR input set (``vis.hpr_input``) as in the module docstring."""
+    out = np.zeros_like(fov)
+    whole = _point_cloud(points) if vis.hpr_input == "surface" else None
     for i in np.flatnonzero(fov.any(axis=1)):
         if whole is not None:
-            vis[i] = fov[i] & _hpr_on_cloud(whole, points, viewpoints[i], radius_factor)
+            out[i] = fov[i] & _hpr_on_cloud(whole, points, viewpoints[i], vis)
         else:
             idx = np.flatnonzero(fov[i])
             sub = points[idx]
-            vis[i, idx] = _hpr_on_cloud(_point_cloud(sub), sub, viewpoints[i], radius_factor)
-    return vis
+            out[i, idx] = _hpr_on_cloud(_point_cloud(sub), sub, viewpoints[i], vis)
+    return out
 
 
 class VisibilityScene:
@@ -251,56 +259,107 @@ def raycast_visible(mesh, points, normals, viewpoints) -> np.ndarray:
     return scene.visible(points, normals, viewpoints)
 
 
-def visible_from(
-    points,
-    normals,
-    world_T_cameras,
-    camera: CameraParams,
-    *, method: str = "hpr",
-    mesh=None,
-    hpr_input: str = "surface",
-) -> np.ndarray:
-    """Surface points seen by each camera pose: FOV pyramid AND (HPR or ray casting).
+def _as_scene(scene, method: str):
+    """The ray-casting scene of ``scene`` (a mesh or a :class:`VisibilityScene`); HPR needs none."""
+    if method != "raycast":
+        return None
+    if scene is None:
+        raise ValueError("scene (the occluding mesh or a VisibilityScene) is required for method='raycast'")
+    return scene if isinstance(scene, VisibilityScene) else VisibilityScene(scene)
+
+
+def visible_points(visibility: Visibility, points, normals, viewpoints, *, scene=None,
+                   candidates=None) -> np.ndarray:
+    """Surface points seen from each viewpoint, by ``visibility``'s method: the one dispatch.
+
+    Parameters
+    ----------
+    visibility : Visibility
+        ``"raycast"``: nothing of ``scene`` on the segment and, with normals, the point faces the
+        viewpoint; ``"hpr"``: HPR (radius and input set from ``visibility``) keeps the point.
+    points : (n, 3) float, metres
+        Surface sample S.
+    normals : (n, 3) float or None
+        Outward normals (ray casting only; HPR is position-only, as in the paper).
+    viewpoints : (m, 3) float, metres
+    scene : trimesh.Trimesh or VisibilityScene, optional
+        Occluders; required for ``"raycast"``.
+    candidates : (m, n) bool, optional
+        Only these pairs can be visible (e.g. the FOV pyramid); default all.
+
+    Returns
+    -------
+    (m, n) bool
+    """
+    check_instance("visibility", visibility, Visibility)
+    P = check_points("points", points)
+    V = check_points("viewpoints", viewpoints)
+    ray_scene = _as_scene(scene, visibility.method)
+    if ray_scene is not None:
+        return ray_scene.visible(P, normals, V, candidates=candidates)
+    cand = np.ones((len(V), len(P)), dtype=bool) if candidates is None else np.asarray(candidates, dtype=bool)
+    if cand.shape != (len(V), len(P)):
+        raise ValueError(f"candidates must have shape {(len(V), len(P))}, got {cand.shape}")
+    return _hpr_in_fov(P, cand, V, visibility)
+
+
+def visible_each(visibility: Visibility, points, normals, viewpoints, *, scene=None) -> np.ndarray:
+    """Whether point i is seen from viewpoint i, (n,) bool (e.g. each element from its own
+    camera pose); HPR runs on the whole of ``points`` from each viewpoint.
+
+    Parameters
+    ----------
+    visibility : Visibility
+    points, viewpoints : (n, 3) float, metres
+    normals : (n, 3) float or None
+        Ray casting only: a point must face its viewpoint.
+    scene : trimesh.Trimesh or VisibilityScene, optional
+        Required for ``"raycast"``.
+    """
+    check_instance("visibility", visibility, Visibility)
+    P = check_points("points", points)
+    V = check_points("viewpoints", viewpoints)
+    if V.shape != P.shape:
+        raise ValueError(f"viewpoints must have the shape of points {P.shape}, got {V.shape}")
+    ray_scene = _as_scene(scene, visibility.method)
+    if ray_scene is None:
+        whole = _point_cloud(P)
+        return np.array([_hpr_on_cloud(whole, P, v, visibility)[i] for i, v in enumerate(V)], dtype=bool)
+    seen = ray_scene.unoccluded(V, P)
+    if normals is not None:
+        seen &= np.einsum("ij,ij->i", check_points("normals", normals), V - P) > 0.0
+    return seen
+
+
+def visible_from(points, normals, world_T_cameras, camera: CameraParams, visibility: Visibility = Visibility(),
+                 *, scene=None) -> np.ndarray:
+    """Surface points seen by each camera pose: FOV pyramid AND ``visibility`` (HPR or ray casting).
 
     Parameters
     ----------
     points : (n, 3) float, metres
         Surface sample S.
     normals : (n, 3) float or None
-        Outward normals; used by ``method="raycast"`` only (HPR is position-only, as in the
-        paper).
+        Outward normals; used by ray casting only.
     world_T_cameras : (m, 4, 4) or (4, 4) float
         Camera poses; the viewpoint is the translation.
     camera : CameraParams
-    method : {"hpr", "raycast"}
-        ``"hpr"`` reproduces MAVAC; ``"raycast"`` is exact (needs ``mesh``).
-    mesh : trimesh.Trimesh or VisibilityScene, optional
-        Required for ``"raycast"``.
-    hpr_input : {"surface", "fov"}
-        Point set given to HPR (see the module docstring); default: the whole S.
+    visibility : Visibility
+        Default: the package's (exact ray casting); ``Visibility("hpr")`` reproduces MAVAC.
+    scene : trimesh.Trimesh or VisibilityScene, optional
+        Required for ray casting.
 
     Returns
     -------
     (m, n) bool
     """
-    if method not in ("hpr", "raycast"):
-        raise ValueError(f"method must be 'hpr' or 'raycast', got {method!r}")
-    if hpr_input not in _HPR_INPUTS:
-        raise ValueError(f"hpr_input must be one of {_HPR_INPUTS}, got {hpr_input!r}")
     P = check_points("points", points)
     T = check_transforms("world_T_cameras", world_T_cameras)
-    fov = fov_masks(P, T, camera)
-    if method == "hpr":
-        return _hpr_in_fov(P, fov, T[:, :3, 3], camera.hpr_radius_factor, hpr_input)
-    if mesh is None:
-        raise ValueError("mesh is required for method='raycast'")
-    scene = mesh if isinstance(mesh, VisibilityScene) else VisibilityScene(mesh)
-    return scene.visible(P, normals, T[:, :3, 3], candidates=fov)
+    return visible_points(visibility, P, normals, T[:, :3, 3], scene=scene, candidates=fov_masks(P, T, camera))
 
 
-def hpr_error_rates(
-    mesh, points, normals, world_T_cameras, camera: CameraParams, *, hpr_input: str = "surface"
-) -> dict:
+def hpr_error_rates(mesh, points, normals, world_T_cameras, camera: CameraParams, *,
+                    visibility: Visibility = Visibility("hpr")) -> dict:
     """HPR's misclassifications against exact ray casting, over many camera poses.
 
     Only (pose, point) pairs inside the FOV pyramid are scored (outside, both methods say
@@ -320,8 +379,8 @@ def hpr_error_rates(
         Surface sample and outward normals (normals may be None).
     world_T_cameras : (m, 4, 4) float
     camera : CameraParams
-    hpr_input : {"surface", "fov"}
-        Point set given to HPR (see module docstring).
+    visibility : Visibility
+        HPR's radius and input set (its method is ignored: HPR is scored).
 
     Returns
     -------
@@ -332,15 +391,14 @@ def hpr_error_rates(
         ``n_ray_hidden``, ``n_false_visible``, ``n_false_hidden``, ``agreement`` (fraction of
         scored pairs on which both agree).
     """
-    if hpr_input not in _HPR_INPUTS:
-        raise ValueError(f"hpr_input must be one of {_HPR_INPUTS}, got {hpr_input!r}")
+    check_instance("visibility", visibility, Visibility)
     P = check_points("points", points)
     T = check_transforms("world_T_cameras", world_T_cameras)
     fov = fov_masks(P, T, camera)
     viewpoints = T[:, :3, 3]
 
     t0 = time.perf_counter()
-    hpr = _hpr_in_fov(P, fov, viewpoints, camera.hpr_radius_factor, hpr_input)
+    hpr = _hpr_in_fov(P, fov, viewpoints, visibility)
     hpr_seconds = time.perf_counter() - t0
 
     t0 = time.perf_counter()
