@@ -54,15 +54,6 @@ def test_non_string_reading_is_a_type_error():
         online_params(1)
 
 
-_MISSING = [name for name, ok in (("mavac.params.Visibility", hasattr(mp, "Visibility")),
-                                  ("GuardParams.standoff", "standoff" in {f.name for f in dataclasses.fields(mp.GuardParams)}),
-                                  ("InspectionParams.visibility field",
-                                   "visibility" in {f.name for f in dataclasses.fields(mp.InspectionParams)}))
-            if not ok]
-
-
-@pytest.mark.skipif(bool(_MISSING), reason=f"offline reading needs {', '.join(_MISSING)} (added by the "
-                                           "offline work of issue 20, not on this branch yet)")
 def test_authors_offline_reading():
     paper, authors = inspection_params("paper"), inspection_params("authors")
     assert paper == mp.InspectionParams()

@@ -38,7 +38,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..params import SamplingParams, SetupSpaceParams
+from ..params import SAMPLING_VARIANTS, SamplingParams, SetupSpaceParams
 from ..tolerances import COUNT_SLACK
 from ..validate import check_int, check_positive, check_size
 from .dominance import nondominated
@@ -46,8 +46,9 @@ from .reach import CountingReach, lookup_reach, setup_keys  # noqa: F401  (re-ex
 
 ReachFn = Callable[[np.ndarray], np.ndarray]
 
-#: Table I names; "a" spells alpha, "none" is sampling without gradient descent.
-VARIANTS = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_XYa")
+#: Table I names (one home: :data:`mavac.params.SAMPLING_VARIANTS`); "a" spells alpha, "none" is
+#: sampling without gradient descent.
+VARIANTS = SAMPLING_VARIANTS
 GD_VARIANTS = VARIANTS[1:]
 
 _STAGES = {"XY": ((0, 1),), "XY_a": ((0, 1), (2,)), "XYa": ((0, 1, 2),)}
