@@ -17,7 +17,6 @@ import argparse
 import numbers
 import sys
 from dataclasses import dataclass
-from pathlib import Path
 
 import pandas as pd
 
