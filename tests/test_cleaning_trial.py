@@ -116,8 +116,8 @@ def _table_row(result) -> dict:
 
 def test_same_row_on_a_slow_or_fast_clock(small, monkeypatch):
     # A loaded machine is a clock that runs fast. No wall-clock cap may change the row: a clock
-    # 300x too slow gives the same row, and one 300x too fast gives it too, or raises
-    # PlanningTimeout (the cap is a safety net, never a quiet failure).
+    # 300x too slow or a huge cap give the same row; a clock 10,000x too fast or a 0.1 ms cap
+    # give it too, or raise PlanningTimeout (the cap is a safety net, never a quiet failure).
     import time
 
     from mavac.planning.rrt import PlanningTimeout
@@ -127,14 +127,14 @@ def test_same_row_on_a_slow_or_fast_clock(small, monkeypatch):
     monkeypatch.setattr(time, "perf_counter", _Clock(real, 1 / 300))
     reference = _table_row(T.run_trial(machine, plan, params=PARAMS, seed=3))
     assert reference["cleaned"] > 0
-    monkeypatch.setattr(time, "perf_counter", _Clock(real, 300.0))
-    try:
-        assert _table_row(T.run_trial(machine, plan, params=PARAMS, seed=3)) == reference
-    except PlanningTimeout as exc:
-        assert "time_limit" in str(exc)
-    monkeypatch.setattr(time, "perf_counter", real)
-    huge_cap = dataclasses.replace(PARAMS, approach=ApproachParams(rrt_time_limit=1e6))
-    assert _table_row(T.run_trial(machine, plan, params=huge_cap, seed=3)) == reference
+    huge_cap, tiny_cap = (dataclasses.replace(PARAMS, approach=ApproachParams(rrt_time_limit=cap))
+                          for cap in (1e6, 1e-4))
+    for rate, params in ((1.0, huge_cap), (1e4, PARAMS), (1.0, tiny_cap)):
+        monkeypatch.setattr(time, "perf_counter", _Clock(real, rate))
+        try:
+            assert _table_row(T.run_trial(machine, plan, params=params, seed=3)) == reference, (rate, params.approach)
+        except PlanningTimeout as exc:
+            assert "time_limit" in str(exc) and params is not huge_cap
 
 
 @pytest.fixture(scope="module")
