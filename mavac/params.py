@@ -707,8 +707,8 @@ class NoSParams:
     # that our plans reach need a few hundred iterations, 10,000 take ~1.5 s on our machine.
     rrt_max_iterations: int = 10_000
     # Ours: wall-time safety net per NoS guard, s. It never decides a result: when it fires before
-    # the budget is spent, planning raises PlanningTimeout (300 s is ~200x a 10,000-iteration
-    # search on our machine, so it only fires on a hang).
+    # the budget is spent, planning raises PlanningTimeout (300 s: ~15x what 10,000 iterations
+    # take at the slowest rate we measured, 4-7 s per 3000 on a loaded 2-core machine).
     rrt_time_limit: float = 300.0
     # Ours: collision-check resolution of RRT-Connect (fraction of the space extent).
     rrt_resolution: float = 0.01
@@ -898,8 +898,9 @@ class ApproachParams:
     # resolution (fraction of the joint box diagonal).
     rrt_max_iterations: int = 3000
     # Ours: wall-time safety net per plan, s. It never decides a result: when it fires before
-    # the budget is spent, planning raises PlanningTimeout. 120 s is ~100x the slowest
-    # 3000-iteration search we measured (~1.4 s), so it only fires on a hang.
+    # the budget is spent, planning raises PlanningTimeout. 120 s is ~17x the slowest
+    # 3000-iteration search we measured (4-7 s on a loaded 2-core machine), so it only fires on
+    # a hang; a re-plan's cap grows with its budget (rrt_retry_factor).
     rrt_time_limit: float = 120.0
     rrt_resolution: float = 0.01
     # Ours: a guard or fold-home motion that fails within rrt_max_iterations is planned once more

@@ -107,8 +107,9 @@ def plan_rrt_connect(
     time_limit : float, s
         Wall-time safety net of the search, > 0 (simplification is not counted in it). It never
         decides the result: if it fires before ``max_iterations`` are spent, the call raises
-        :class:`PlanningTimeout`. Ours, 600 s: far above any search we have measured (a 30,000
-        iteration UR10 search takes ~15 s), so it only fires on a hung validity check.
+        :class:`PlanningTimeout`. Ours, 600 s: ten times the slowest search we measured (30,000
+        unsolvable UR10 iterations against a machine took 34-59 s on a loaded 2-core machine),
+        so it only fires on a hang or a far slower computer.
     seed : int, >= 0
         Seed of OMPL's random generators for this call.
     resolution : float
