@@ -150,8 +150,8 @@ def two_spots(box_plan):
 
 @pytest.fixture
 def watched(monkeypatch):
-    """Records every arm plan (goal, budget factor) and drive (configuration when the base moves),
-    and fails the test on any ``reset_q`` after the cell is built (a teleport)."""
+    """Lists for the planner calls and the drives (the configuration when the base moves); fails
+    the test on any ``reset_q`` after the cell is built (a teleport)."""
     calls, drives = [], []
     real_build, real_drive = T.build_cell, T._Run.drive_to
 
@@ -174,11 +174,12 @@ def watched(monkeypatch):
 
 
 def _failing_planner(monkeypatch, calls, fails):
-    """``plan_arm_motion`` that fails (as RRT-Connect would) whenever ``fails(goal, factor)``."""
+    """``plan_arm_motion`` that fails (as RRT-Connect would) whenever ``fails(goal, factor)``;
+    records (goal, budget factor, seed) of every call in ``calls``."""
     real = T.plan_arm_motion
 
     def planner(robot, checker, q_start, q_goal, params, *, seed, budget_factor=1):
-        calls.append((np.array(q_goal), budget_factor))
+        calls.append((np.array(q_goal), budget_factor, seed))
         if fails(np.asarray(q_goal), budget_factor):
             return T.Motion(None, False, "iteration budget exhausted", 0.0)
         return real(robot, checker, q_start, q_goal, params, seed=seed, budget_factor=budget_factor)
@@ -192,7 +193,7 @@ def test_failed_fold_is_replanned_then_retraced_never_teleported(two_spots, watc
     home = T.ur10_mobile().q_home
     _failing_planner(monkeypatch, calls, lambda goal, factor: np.allclose(goal, home))
     r = T.run_trial(machine, plan, params=PARAMS, seed=3)
-    assert [f for g, f in calls if np.allclose(g, home)] == [1, 10]  # re-planned with 10x the budget
+    assert [f for g, f, _ in calls if np.allclose(g, home)] == [1, 10]  # re-planned with 10x the budget
     assert (r.fold_failures, r.folds_retraced, r.poses_skipped) == (1, 1, 0)
     assert r.guards == 4 and r.row()["fold_failures"] == 1 and r.row()["folds_retraced"] == 1
     assert len(drives) == 2
@@ -218,16 +219,28 @@ def test_unreachable_guards_are_counted_and_their_heaps_have_a_cause(two_spots, 
     guards = plan.poses[:, 3:]
     _failing_planner(monkeypatch, calls, lambda goal, factor: any(np.allclose(goal, q) for q in guards))
     r = T.run_trial(machine, plan, params=PARAMS, seed=3)
-    assert [f for _, f in calls].count(10) == 4  # every guard re-planned once with 10x the budget
+    assert [f for _, f, _ in calls].count(10) == 4  # every guard re-planned once with 10x the budget
     assert (r.guards, r.guards_unreachable, r.poses_skipped, r.replanned) == (0, 4, 4, 0)
     assert r.n_cleaned == 0 and r.miss_counts()["guard not reached"] > 0
     assert r.row()["guards_unreachable"] == 4 and r.row()["poses_skipped"] == 4
 
 
-def test_guard_solved_by_the_larger_budget_is_counted(two_spots, watched, monkeypatch):
+def test_guard_solved_by_the_larger_budget_is_counted_and_no_two_plans_share_a_seed(two_spots, watched,
+                                                                                      monkeypatch):
+    from mavac.cleaning import approach as A
+
     machine, plan = two_spots
     calls, _ = watched
     second = plan.poses[1, 3:]
     _failing_planner(monkeypatch, calls, lambda goal, factor: factor == 1 and np.allclose(goal, second))
+    seeds, real = [], A.plan_arm_motion
+
+    def approach_planner(*args, seed, **kwargs):
+        seeds.append(seed)
+        return real(*args, seed=seed, **kwargs)
+
+    monkeypatch.setattr(A, "plan_arm_motion", approach_planner)
     r = T.run_trial(machine, plan, params=PARAMS, seed=3)
     assert (r.replanned, r.guards_unreachable, r.guards) == (1, 0, 4)
+    seeds += [s for *_, s in calls]
+    assert len(seeds) > len(calls) and len(set(seeds)) == len(seeds)

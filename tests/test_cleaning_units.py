@@ -145,6 +145,12 @@ def test_negative_parameters_are_refused_by_name(cls, field):
         cls(**{field: -0.1})
 
 
+@pytest.mark.parametrize("value", [0, 2.5, -1])
+def test_retry_factor_is_a_positive_int(value):
+    with pytest.raises((ValueError, TypeError), match="rrt_retry_factor"):
+        ApproachParams(rrt_retry_factor=value)
+
+
 def test_approach_reading_must_be_known():
     with pytest.raises(ValueError, match="approach_reading"):
         ApproachParams(approach_reading="sideways")
