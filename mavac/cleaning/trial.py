@@ -155,8 +155,10 @@ class TrialResult:
         return cause_counts(self.causes)
 
     def row(self) -> dict:
-        """The Table 2 row (``data/results/mavac_table2.csv`` columns), with the counts of
-        motions that failed (nothing is hidden: see the module docstring)."""
+        """One trial's row: the Table 2 columns (``data/results/mavac_table2.csv``), then
+        ``guards``, ``replanned``, ``guards_unreachable``, ``fold_failures``, ``folds_retraced``
+        and ``poses_skipped`` (failed motions are counted, never hidden), then the simulated and
+        wall time, s."""
         return dict(machine=self.machine, trial=None, seed=self.seed, heaps=self.n_heaps, cleaned=self.n_cleaned,
                     uncleaned=self.n_heaps - self.n_cleaned, cleaning_pct=round(self.cleaning_pct, 3),
                     detected=self.detected, precision=round(self.precision, 4), recall=round(self.recall, 4),
