@@ -904,8 +904,9 @@ class ApproachParams:
     rrt_time_limit: float = 120.0
     rrt_resolution: float = 0.01
     # Ours: a guard or fold-home motion that fails within rrt_max_iterations is planned once more
-    # with this many times the budget (and the cap), because a failure at 3000 iterations is
-    # mostly a narrow passage, not an impossible motion; only a second failure is counted.
+    # with this many times the budget (and the cap) before it is counted as a failure, because a
+    # failure within a budget may be a narrow passage rather than an impossible motion; the
+    # re-plan costs time only where the first plan failed.
     rrt_retry_factor: int = 10
     # Ours: the arm's joint speed and acceleration limits for planned motions (UR10: 2.09-3.14
     # rad/s per joint, datasheet; ours slower, as near a machine).
