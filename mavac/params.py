@@ -706,8 +706,10 @@ class NoSParams:
     # not the clock, ends the search, so plans do not depend on the machine's speed; NoS guards
     # that our plans reach need a few hundred iterations, 10,000 take ~1.5 s on our machine.
     rrt_max_iterations: int = 10_000
-    # Ours: wall-time safety cap per NoS guard, s (only binds on a machine >~5x slower than ours).
-    rrt_time_limit: float = 10.0
+    # Ours: wall-time safety net per NoS guard, s. It never decides a result: when it fires before
+    # the budget is spent, planning raises PlanningTimeout (300 s: ~15x what 10,000 iterations
+    # take at the slowest rate we measured, 4-7 s per 3000 on a loaded 2-core machine).
+    rrt_time_limit: float = 300.0
     # Ours: collision-check resolution of RRT-Connect (fraction of the space extent).
     rrt_resolution: float = 0.01
     enabled: bool = True
@@ -892,11 +894,20 @@ class ApproachParams:
     n_orientations: int = 8
     # Ours: clearance of approach configurations and RRT-Connect paths to the machine, m.
     collision_margin: float = 0.01
-    # Ours: RRT-Connect budget per plan (iterations, not time: deterministic), its wall-time
-    # safety cap, s, and collision-check resolution (fraction of the joint box diagonal).
+    # Ours: RRT-Connect budget per plan (iterations, not time: deterministic) and collision-check
+    # resolution (fraction of the joint box diagonal).
     rrt_max_iterations: int = 3000
-    rrt_time_limit: float = 5.0
+    # Ours: wall-time safety net per plan, s. It never decides a result: when it fires before
+    # the budget is spent, planning raises PlanningTimeout. 120 s is ~17x the slowest
+    # 3000-iteration search we measured (4-7 s on a loaded 2-core machine), so it only fires on
+    # a hang; a re-plan's cap grows with its budget (rrt_retry_factor).
+    rrt_time_limit: float = 120.0
     rrt_resolution: float = 0.01
+    # Ours: a guard or fold-home motion that fails within rrt_max_iterations is planned once more
+    # with this many times the budget (and the cap) before it is counted as a failure, because a
+    # failure within a budget may be a narrow passage rather than an impossible motion; the
+    # re-plan costs time only where the first plan failed.
+    rrt_retry_factor: int = 10
     # Ours: the arm's joint speed and acceleration limits for planned motions (UR10: 2.09-3.14
     # rad/s per joint, datasheet; ours slower, as near a machine).
     max_joint_velocity: float = 1.0
@@ -919,6 +930,7 @@ class ApproachParams:
         check_int("rrt_max_iterations", self.rrt_max_iterations, 1)
         check_positive("rrt_time_limit", self.rrt_time_limit)
         check_range("rrt_resolution", self.rrt_resolution, 0.0, 1.0, lo_open=True)
+        check_int("rrt_retry_factor", self.rrt_retry_factor, 1)
         check_positive("max_joint_velocity", self.max_joint_velocity)
         check_positive("max_joint_acceleration", self.max_joint_acceleration)
 

@@ -24,12 +24,18 @@ def _connected_clients() -> list[int]:
 
 
 @pytest.fixture(scope="module")
-def small():
-    """A 1.0 x 0.6 x 0.6 m box and the first three poses of its fast-mode plan."""
+def box_plan():
+    """A 1.0 x 0.6 x 0.6 m box and its fast-mode plan."""
     machine = machine_from_mesh(trimesh.creation.box(bounds=[[-0.5, -0.3, 0.0], [0.5, 0.3, 0.6]]), name="box")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        plan = plan_inspection(machine, params=fast_params())
+        return machine, plan_inspection(machine, params=fast_params())
+
+
+@pytest.fixture(scope="module")
+def small(box_plan):
+    """The box and the first three poses of its plan."""
+    machine, plan = box_plan
     return machine, dataclasses.replace(plan, pose_set=plan.pose_set.head(3))
 
 
@@ -90,3 +96,151 @@ def test_bad_inputs_are_refused():
         T.run_trial("bench", None)
     with pytest.raises(ValueError, match="seed"):
         T.run_trial(machine_from_mesh(trimesh.creation.box(extents=[1, 1, 1]), name="b"), None, seed=-1)
+
+
+class _Clock:
+    """``time.perf_counter`` running ``rate`` times as fast as the real one."""
+
+    def __init__(self, real, rate: float):
+        self.real, self.rate, self.origin = real, rate, real()
+
+    def __call__(self) -> float:
+        return self.origin + self.rate * (self.real() - self.origin)
+
+
+def _table_row(result) -> dict:
+    row = result.row()
+    row.pop("wall_s")
+    return row | {"causes": result.causes.tolist()}
+
+
+def test_same_row_on_a_slow_or_fast_clock(small, monkeypatch):
+    # A loaded machine is a clock that runs fast. No wall-clock cap may change the row: a clock
+    # 300x too slow or a huge cap give the same row; a clock 10,000x too fast or a 0.1 ms cap
+    # give it too, or raise PlanningTimeout (the cap is a safety net, never a quiet failure).
+    import time
+
+    from mavac.planning.rrt import PlanningTimeout
+
+    machine, plan = small
+    real = time.perf_counter
+    monkeypatch.setattr(time, "perf_counter", _Clock(real, 1 / 300))
+    reference = _table_row(T.run_trial(machine, plan, params=PARAMS, seed=3))
+    assert reference["cleaned"] > 0
+    huge_cap, tiny_cap = (dataclasses.replace(PARAMS, approach=ApproachParams(rrt_time_limit=cap))
+                          for cap in (1e6, 1e-4))
+    for rate, params in ((1.0, huge_cap), (1e4, PARAMS), (1.0, tiny_cap)):
+        monkeypatch.setattr(time, "perf_counter", _Clock(real, rate))
+        try:
+            assert _table_row(T.run_trial(machine, plan, params=params, seed=3)) == reference, (rate, params.approach)
+        except PlanningTimeout as exc:
+            assert "time_limit" in str(exc) and params is not huge_cap
+
+
+@pytest.fixture(scope="module")
+def two_spots(box_plan):
+    """The box and four poses of its plan over two spots (two each)."""
+    machine, plan = box_plan
+    ps = plan.pose_set
+    idx = np.r_[np.flatnonzero(ps.spot == ps.spot[0])[:2], np.flatnonzero(ps.spot != ps.spot[0])[:2]]
+    sub = type(ps)(*(getattr(ps, f.name)[idx] for f in dataclasses.fields(ps)))
+    assert len(set(sub.spot.tolist())) == 2
+    return machine, dataclasses.replace(plan, pose_set=sub)
+
+
+@pytest.fixture
+def watched(monkeypatch):
+    """Lists for the planner calls and the drives (the configuration when the base moves); fails
+    the test on any ``reset_q`` after the cell is built (a teleport)."""
+    calls, drives = [], []
+    real_build, real_drive = T.build_cell, T._Run.drive_to
+
+    def build(*args, **kwargs):
+        cell = real_build(*args, **kwargs)
+
+        def teleport(q):
+            raise AssertionError("the arm was teleported (reset_q)")
+
+        cell.sim.reset_q = teleport
+        return cell
+
+    def drive(self, spot):
+        drives.append(self.cell.sim.q())
+        return real_drive(self, spot)
+
+    monkeypatch.setattr(T, "build_cell", build)
+    monkeypatch.setattr(T._Run, "drive_to", drive)
+    return calls, drives
+
+
+def _failing_planner(monkeypatch, calls, fails):
+    """``plan_arm_motion`` that fails (as RRT-Connect would) whenever ``fails(goal, factor)``;
+    records (goal, budget factor, seed) of every call in ``calls``."""
+    real = T.plan_arm_motion
+
+    def planner(robot, checker, q_start, q_goal, params, *, seed, budget_factor=1):
+        calls.append((np.array(q_goal), budget_factor, seed))
+        if fails(np.asarray(q_goal), budget_factor):
+            return T.Motion(None, False, "iteration budget exhausted", 0.0)
+        return real(robot, checker, q_start, q_goal, params, seed=seed, budget_factor=budget_factor)
+
+    monkeypatch.setattr(T, "plan_arm_motion", planner)
+
+
+def test_failed_fold_is_replanned_then_retraced_never_teleported(two_spots, watched, monkeypatch):
+    machine, plan = two_spots
+    calls, drives = watched
+    home = T.ur10_mobile().q_home
+    _failing_planner(monkeypatch, calls, lambda goal, factor: np.allclose(goal, home))
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    assert [f for g, f, _ in calls if np.allclose(g, home)] == [1, 10]  # re-planned with 10x the budget
+    assert (r.fold_failures, r.folds_retraced, r.poses_skipped) == (1, 1, 0)
+    assert r.guards == 4 and r.row()["fold_failures"] == 1 and r.row()["folds_retraced"] == 1
+    assert len(drives) == 2
+    np.testing.assert_allclose(drives[1], home, atol=0.05)  # folded by retracing, then driven
+
+
+def test_fold_that_cannot_even_retrace_stops_and_counts(two_spots, watched, monkeypatch):
+    machine, plan = two_spots
+    calls, drives = watched
+    home = T.ur10_mobile().q_home
+    _failing_planner(monkeypatch, calls, lambda goal, factor: np.allclose(goal, home))
+    monkeypatch.setattr(T._Run, "retrace", lambda self: None)
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    assert (r.fold_failures, r.folds_retraced, r.poses_skipped, r.guards) == (1, 0, 2, 2)
+    assert len(drives) == 1  # never drove with the arm out
+    assert any("could not fold" in w for w in r.warnings)
+    assert set(r.causes) <= set(T.CAUSES) | {""}
+
+
+def test_unreachable_guards_are_counted_and_their_heaps_have_a_cause(two_spots, watched, monkeypatch):
+    machine, plan = two_spots
+    calls, _ = watched
+    guards = plan.poses[:, 3:]
+    _failing_planner(monkeypatch, calls, lambda goal, factor: any(np.allclose(goal, q) for q in guards))
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    assert [f for _, f, _ in calls].count(10) == 4  # every guard re-planned once with 10x the budget
+    assert (r.guards, r.guards_unreachable, r.poses_skipped, r.replanned) == (0, 4, 4, 0)
+    assert r.n_cleaned == 0 and r.miss_counts()["guard not reached"] > 0
+    assert r.row()["guards_unreachable"] == 4 and r.row()["poses_skipped"] == 4
+
+
+def test_guard_solved_by_the_larger_budget_is_counted_and_no_two_plans_share_a_seed(two_spots, watched,
+                                                                                      monkeypatch):
+    from mavac.cleaning import approach as A
+
+    machine, plan = two_spots
+    calls, _ = watched
+    second = plan.poses[1, 3:]
+    _failing_planner(monkeypatch, calls, lambda goal, factor: factor == 1 and np.allclose(goal, second))
+    seeds, real = [], A.plan_arm_motion
+
+    def approach_planner(*args, seed, **kwargs):
+        seeds.append(seed)
+        return real(*args, seed=seed, **kwargs)
+
+    monkeypatch.setattr(A, "plan_arm_motion", approach_planner)
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    assert (r.replanned, r.guards_unreachable, r.guards) == (1, 0, 4)
+    seeds += [s for *_, s in calls]
+    assert len(seeds) > len(calls) and len(set(seeds)) == len(seeds)

@@ -117,16 +117,17 @@ def test_base_path_goes_around_the_machine():
 
 
 def test_miss_cause_is_the_furthest_stage():
-    ev = HeapEvents.empty(7)
-    ev.mark("in_frustum", [1, 2, 3, 4, 5, 6])
-    ev.mark("in_image", [2, 3, 4, 5, 6, -1])
-    ev.mark("no_approach", [3])
-    ev.mark("planner_failed", [4])
-    ev.mark("attempted", [5, 6])
-    causes = miss_causes(ev, [False, False, False, False, False, False, True])
-    assert causes.tolist() == ["never in view", "hidden", "filtered", "no approach found", "planner failed",
-                               "vacuum missed", ""]
-    assert sum(cause_counts(causes).values()) == 6
+    ev = HeapEvents.empty(8)
+    ev.mark("in_skipped_view", [1, 2])
+    ev.mark("in_frustum", [2, 3, 4, 5, 6, 7])
+    ev.mark("in_image", [3, 4, 5, 6, 7, -1])
+    ev.mark("no_approach", [4])
+    ev.mark("planner_failed", [5])
+    ev.mark("attempted", [6, 7])
+    causes = miss_causes(ev, [False, False, False, False, False, False, False, True])
+    assert causes.tolist() == ["never in view", "guard not reached", "hidden", "filtered", "no approach found",
+                               "planner failed", "vacuum missed", ""]
+    assert sum(cause_counts(causes).values()) == 7
 
 
 def test_frustum_and_matching():
@@ -142,6 +143,12 @@ def test_frustum_and_matching():
 def test_negative_parameters_are_refused_by_name(cls, field):
     with pytest.raises(ValueError, match=field):
         cls(**{field: -0.1})
+
+
+@pytest.mark.parametrize("value", [0, 2.5, -1])
+def test_retry_factor_is_a_positive_int(value):
+    with pytest.raises((ValueError, TypeError), match="rrt_retry_factor"):
+        ApproachParams(rrt_retry_factor=value)
 
 
 def test_approach_reading_must_be_known():

@@ -101,7 +101,7 @@ def test_unreachable_goal_is_unsolved():
     def ring_free(q):  # the centre is enclosed by an invalid ring
         return not (0.2 < np.linalg.norm(q - CENTRE) < 0.3)
 
-    res = plan_rrt_connect(ring_free, CENTRE, [0.95, 0.5], LOWER, UPPER, time_limit=0.05)
+    res = plan_rrt_connect(ring_free, CENTRE, [0.95, 0.5], LOWER, UPPER, max_iterations=300)
     assert not res.solved and res.path is None and res.reason != "solved"
 
 
@@ -140,3 +140,52 @@ def test_bad_parameters_raise(kwargs, name):
     args.update(kwargs)
     with pytest.raises(ValueError, match=name):
         plan_rrt_connect(**args)
+
+
+class _Clock:
+    """``time.perf_counter`` running ``rate`` times as fast as the real one."""
+
+    def __init__(self, real, rate: float):
+        self.real, self.rate, self.origin = real, rate, real()
+
+    def __call__(self) -> float:
+        return self.origin + self.rate * (self.real() - self.origin)
+
+
+def _slit(q):  # a wall at x = 0.5 with a 2 % slit: RRT-Connect needs hundreds of iterations
+    return not (0.45 < q[0] < 0.55 and abs(q[1] - 0.5) > 0.01)
+
+
+def _plans(seeds, **kwargs):
+    out = []
+    for s in seeds:
+        r = plan_rrt_connect(_slit, [0.1, 0.1], [0.9, 0.9], LOWER, UPPER, seed=s, max_iterations=3000, **kwargs)
+        out.append((r.solved, r.reason, None if r.path is None else r.path.tobytes()))
+    return out
+
+
+def test_results_do_not_depend_on_the_clock(monkeypatch):
+    # Same seeds, same budget: a clock 300x too slow or a huge cap change nothing, and a clock
+    # 300x too fast (a loaded machine) or a tiny cap either changes nothing or raises
+    # PlanningTimeout; it never turns a solved plan into a quiet failure.
+    import time
+
+    from mavac.planning.rrt import PlanningTimeout
+
+    seeds = range(6)
+    reference = _plans(seeds)
+    assert any(solved for solved, _, _ in reference)
+    assert _plans(seeds, time_limit=1e6) == reference
+    real, raised = time.perf_counter, 0
+    for rate, cap in ((1 / 300, 600.0), (300.0, 1.0), (1.0, 1e-4)):
+        monkeypatch.setattr(time, "perf_counter", _Clock(real, rate))
+        for s, expected in zip(seeds, reference):
+            try:
+                got = _plans([s], time_limit=cap)[0]
+            except PlanningTimeout as exc:
+                assert "time_limit" in str(exc) and "max_iterations=3000" in str(exc)
+                raised += 1
+                continue
+            assert got == expected, f"seed {s}, clock x{rate:g}, cap {cap} s"
+        monkeypatch.setattr(time, "perf_counter", real)
+    assert raised > 0  # the fast clock and the tiny cap did fire

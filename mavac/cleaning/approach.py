@@ -25,6 +25,7 @@ import pinocchio as pin
 from ..geometry.transforms import check_transform
 from ..params import ApproachParams
 from ..robots.kinematics import ik
+from ..seeding import int_seed
 from .motion import Motion, plan_arm_motion
 
 #: Ours: IK restarts per sampled orientation (the first attempt starts at the current q).
@@ -129,7 +130,8 @@ def find_approach(robot, checker, world_T_base, area_nodes, world_T_guard_tool, 
     rng : numpy.random.Generator
         Orientation samples and IK restarts.
     seed : int
-        RRT-Connect seed (incremented per planned node).
+        Seed of this area's RRT-Connect plans (node ``k`` plans with
+        ``mavac.seeding.int_seed(seed, "approach node", k)``).
 
     Returns
     -------
@@ -146,7 +148,7 @@ def find_approach(robot, checker, world_T_base, area_nodes, world_T_guard_tool, 
             attempts.append((k, "no approach found", 0.0))
             continue
         planner_tried = True
-        motion = plan_arm_motion(robot, checker, q_now, configs[0], params, seed=seed + k)
+        motion = plan_arm_motion(robot, checker, q_now, configs[0], params, seed=int_seed(seed, "approach node", k))
         attempts.append((k, "ok" if motion.solved else "planner failed", motion.seconds))
         if motion.solved:
             T = approach_poses(node, orientations[rows[:1]], params.delta, params.approach_reading)[0]

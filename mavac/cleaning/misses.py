@@ -2,13 +2,16 @@
 
 Per heap, the trial records how far it got; an uncleaned heap's cause is the furthest stage:
 
-1. ``never in view``: never inside the view frustum of a guard image;
-2. ``hidden``: inside a frustum but never drawn (occluded by the machine or the robot);
-3. ``filtered``: drawn in an image but no node of it survived detection and the filters (blob
+1. ``never in view``: never inside the view frustum of a guard image, nor of a skipped one;
+2. ``guard not reached``: inside the planned view frustum of a pose the arm never reached
+   (its guard motion failed even with the larger budget, or the poses after a failed fold-home
+   were skipped), and of no image taken;
+3. ``hidden``: inside a frustum but never drawn (occluded by the machine or the robot);
+4. ``filtered``: drawn in an image but no node of it survived detection and the filters (blob
    too small, depth invalid or beyond the detection limit, out of reach, duplicate);
-4. ``no approach found``: its area had no collision-free, reachable approach point (eq. 5);
-5. ``planner failed``: approach configurations existed, RRT-Connect found no path to any;
-6. ``vacuum missed``: the tool was driven into its area but never came within the suction
+5. ``no approach found``: its area had no collision-free, reachable approach point (eq. 5);
+6. ``planner failed``: approach configurations existed, RRT-Connect found no path to any;
+7. ``vacuum missed``: the tool was driven into its area but never came within the suction
    radius of it.
 
 The ground truth used here (pybullet's segmentation, true heap positions) serves scoring only.
@@ -20,15 +23,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-CAUSES = ("never in view", "hidden", "filtered", "no approach found", "planner failed", "vacuum missed")
+CAUSES = ("never in view", "guard not reached", "hidden", "filtered", "no approach found", "planner failed",
+          "vacuum missed")
+#: numpy dtype holding any cause
+CAUSE_DTYPE = f"<U{max(map(len, CAUSES))}"
 #: stages a heap can reach, in order (the cause of a miss is the furthest one)
-STAGES = ("in_frustum", "in_image", "no_approach", "planner_failed", "attempted")
+STAGES = ("in_skipped_view", "in_frustum", "in_image", "no_approach", "planner_failed", "attempted")
 
 
 @dataclass
 class HeapEvents:
     """(n,) bool per stage, one entry per heap (see the module docstring)."""
 
+    in_skipped_view: np.ndarray
     in_frustum: np.ndarray
     in_image: np.ndarray
     no_approach: np.ndarray
@@ -48,7 +55,8 @@ class HeapEvents:
 def miss_causes(events: HeapEvents, cleaned) -> np.ndarray:
     """(n,) str: the cause of each uncleaned heap, ``""`` for cleaned ones."""
     cleaned = np.asarray(cleaned, dtype=bool)
-    cause = np.full(len(cleaned), CAUSES[0], dtype="<U17")
+    cause = np.full(len(cleaned), CAUSES[0], dtype=CAUSE_DTYPE)
+    cause[events.in_skipped_view] = "guard not reached"
     cause[events.in_frustum] = "hidden"
     cause[events.in_image] = "filtered"
     cause[events.no_approach] = "no approach found"

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..planning.rrt import plan_rrt_connect
 from ..params import ApproachParams
+from ..validate import check_int
 
 #: Ours: the planning box extends this far (rad) beyond the start and goal on every joint.
 BOX_MARGIN = np.pi / 2
@@ -47,7 +48,8 @@ def planning_box(robot, q_start, q_goal) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def plan_arm_motion(robot, checker, q_start, q_goal, params: ApproachParams, *, seed: int) -> Motion:
+def plan_arm_motion(robot, checker, q_start, q_goal, params: ApproachParams, *, seed: int,
+                    budget_factor: int = 1) -> Motion:
     """RRT-Connect from ``q_start`` to ``q_goal`` avoiding ``checker``'s machine and floor.
 
     Parameters
@@ -57,18 +59,28 @@ def plan_arm_motion(robot, checker, q_start, q_goal, params: ApproachParams, *, 
         Already placed at the current base pose.
     q_start, q_goal : (nq,) float, rad
     params : ApproachParams
-        ``rrt_max_iterations``, ``rrt_time_limit``, ``rrt_resolution``.
+        ``rrt_max_iterations``, ``rrt_time_limit`` (a safety net), ``rrt_resolution``.
     seed : int
+        OMPL seed (e.g. :func:`mavac.seeding.int_seed`).
+    budget_factor : int, >= 1
+        Multiplies the iteration budget and the time cap (a re-plan with a larger budget).
 
     Returns
     -------
     Motion
+
+    Raises
+    ------
+    mavac.planning.rrt.PlanningTimeout
+        If the wall-time safety net fires (never a quiet failure).
     """
+    budget_factor = check_int("budget_factor", budget_factor, 1)
     qs, qg = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
     if np.allclose(qs, qg, atol=1e-9):
         return Motion(np.vstack([qs, qg]), True, "same configuration", 0.0)
     lo, hi = planning_box(robot, qs, qg)
     result = plan_rrt_connect(lambda q: not checker.in_collision(q), qs, qg, lo, hi,
-                              time_limit=params.rrt_time_limit, seed=int(seed), resolution=params.rrt_resolution,
-                              max_iterations=params.rrt_max_iterations)
+                              time_limit=params.rrt_time_limit * budget_factor, seed=int(seed),
+                              resolution=params.rrt_resolution,
+                              max_iterations=params.rrt_max_iterations * budget_factor)
     return Motion(result.path, result.solved, result.reason, result.seconds)

@@ -7,6 +7,19 @@ area, find an approach point (eq. 5), plan to it, vacuum its nodes under impedan
 return to the approach point. The result scores the heaps (cleaned or the cause of the miss),
 detection precision and recall, and the simulated time per activity.
 
+Same seed, same result, on any load: every planner stops on an iteration budget, and the
+wall-time caps only raise :class:`mavac.planning.rrt.PlanningTimeout`. Every random stream
+comes from :mod:`mavac.seeding`, one stage name per use (``"guard motion"``, ``"fold motion"``,
+``"approach"``, ``"approach motion"``), indexed by pose, area and attempt.
+
+No hidden failures, and the arm never teleports. A guard or fold-home motion that RRT-Connect
+cannot plan is planned once more with ``rrt_retry_factor`` times the budget. A guard that still
+fails is skipped and counted (``guards_unreachable``). A fold-home that still fails is counted
+(``fold_failures``) and the arm retraces, in reverse, the joint path it executed since it left
+home (collision-free when executed, at the same base pose: ``folds_retraced``); only if that
+path is no longer free does the trial stop, counting the poses it skipped. Heaps that only a
+skipped pose would have seen get the miss cause ``"guard not reached"``.
+
 A trial never raises for a hard scene: no heaps, an empty plan, nothing in view, no dust
 detected or an unreachable area give a result (0 % where nothing was cleaned) with the reason.
 """
@@ -21,17 +34,19 @@ import numpy as np
 from ..geometry.machines import Machine
 from ..geometry.transforms import se2_to_matrix
 from ..params import OnlineParams
+from ..robots.kinematics import fk
 from ..robots.models import ur10_mobile
+from ..seeding import check_seed, int_seed, rng_for
 from ..sim.camera import intrinsics_from_fov, mavac_T_opencv, render_rgbd
 from ..sim.world import SimWorld
-from ..validate import check_instance, check_int
+from ..validate import check_instance
 from .approach import find_approach
 from .clustering import areas_from_nodes
 from .detection import detect_dust, match_nodes
 from .filters import FILTERS, filter_nodes
 from .heaps import heaps_for_trial
-from .misses import CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes
-from .motion import plan_arm_motion
+from .misses import CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes
+from .motion import Motion, plan_arm_motion
 from .scene import build_cell
 from .timing import TrialTimes, base_path_length
 from .vacuum import vacuum_area
@@ -67,7 +82,18 @@ class TrialResult:
         Nodes dropped per filter.
     areas, areas_cleaned : int
     guards : int
-        Poses visited.
+        Poses visited (``guards + poses_skipped`` is the plan's number of poses).
+    replanned : int
+        Guard and fold-home motions solved only by the re-plan with the larger budget.
+    guards_unreachable : int
+        Guard motions that failed even with the larger budget (the pose is skipped).
+    fold_failures : int
+        Fold-home motions that failed even with the larger budget.
+    folds_retraced : int
+        Of those, folds done by retracing the joint path executed since the arm left home.
+    poses_skipped : int
+        Poses never inspected from: unreachable guards, and the poses left when the arm could
+        neither fold nor retrace (the trial stops there: the base cannot drive).
     reason : str
         Why nothing could be done (no heaps, empty plan), else ``""``.
     warnings : list of str
@@ -92,6 +118,11 @@ class TrialResult:
     areas: int = 0
     areas_cleaned: int = 0
     guards: int = 0
+    replanned: int = 0
+    guards_unreachable: int = 0
+    fold_failures: int = 0
+    folds_retraced: int = 0
+    poses_skipped: int = 0
     reason: str = ""
     warnings: list = field(default_factory=list)
     wall_s: float = 0.0
@@ -124,51 +155,111 @@ class TrialResult:
         return cause_counts(self.causes)
 
     def row(self) -> dict:
-        """The Table 2 row (``data/results/mavac_table2.csv`` columns)."""
+        """One trial's row: the Table 2 columns (``data/results/mavac_table2.csv``), then
+        ``guards``, ``replanned``, ``guards_unreachable``, ``fold_failures``, ``folds_retraced``
+        and ``poses_skipped`` (failed motions are counted, never hidden), then the simulated and
+        wall time, s."""
         return dict(machine=self.machine, trial=None, seed=self.seed, heaps=self.n_heaps, cleaned=self.n_cleaned,
                     uncleaned=self.n_heaps - self.n_cleaned, cleaning_pct=round(self.cleaning_pct, 3),
                     detected=self.detected, precision=round(self.precision, 4), recall=round(self.recall, 4),
-                    sim_time_s=round(self.times.sim_time_s, 3), wall_s=round(self.wall_s, 2))
+                    guards=self.guards, replanned=self.replanned, guards_unreachable=self.guards_unreachable,
+                    fold_failures=self.fold_failures, folds_retraced=self.folds_retraced,
+                    poses_skipped=self.poses_skipped, sim_time_s=round(self.times.sim_time_s, 3),
+                    wall_s=round(self.wall_s, 2))
 
 
 class _Run:
-    """State of a trial in progress (cell, heaps' events, vacuumed nodes, counters)."""
+    """State of a trial in progress (cell, heaps' events, vacuumed nodes, counters, and the joint
+    path executed since the arm left home)."""
 
     def __init__(self, cell, machine: Machine, params: OnlineParams, seed: int, result: TrialResult, camera):
         self.cell, self.machine, self.params, self.seed, self.result = cell, machine, params, seed, result
         self.events = HeapEvents.empty(result.n_heaps)
         self.vacuumed = np.zeros((0, 3))
         self.matched = np.zeros(result.n_heaps, dtype=bool)
-        self.n_plans = 0
+        self.since_home: list[np.ndarray] = []  # tracked joint paths since the arm left home
         d = params.detection
         self.fov_y = float(np.degrees(2.0 * camera.theta_b))  # the FOV pyramid's height
         self.K = intrinsics_from_fov(d.width, d.height, self.fov_y)
 
-    def _seed(self) -> int:
-        self.n_plans += 1
-        return (self.seed * 100_003 + self.n_plans) % (2**31 - 2)
+    def execute(self, plan) -> None:
+        """Algorithm 1, line 1-3 and the loop: every pose of T in order, folding and driving
+        between spots; stops (counting the skipped poses) only when the arm cannot fold."""
+        for i, pose in enumerate(plan.poses):
+            if i == 0 or plan.pose_spot[i] != plan.pose_spot[i - 1]:
+                if i > 0 and not self.fold_home(i):
+                    self.skip(plan.poses[i:], f"arm could not fold home before pose {i}")
+                    return
+                self.drive_to(pose[:3])
+            self.inspect_and_clean(i, pose)
 
-    def go_to(self, q_goal, what: str) -> bool:
-        """Plan and track an arm motion to ``q_goal``; False (with a warning) if unplannable."""
-        motion = plan_arm_motion(self.cell.robot, self.cell.checker, self.cell.q_cmd, q_goal, self.params.approach,
-                                 seed=self._seed())
-        self.result.times.planning_wall_s += motion.seconds
+    def plan(self, q_goal, stage: str, index: int) -> Motion:
+        """RRT-Connect from the commanded configuration to ``q_goal``; if it fails, once more
+        with ``rrt_retry_factor`` times the budget (each attempt its own seed)."""
+        a = self.params.approach
+        factors = (1,) if a.rrt_retry_factor == 1 else (1, a.rrt_retry_factor)
+        for attempt, factor in enumerate(factors):
+            motion = plan_arm_motion(self.cell.robot, self.cell.checker, self.cell.q_cmd, q_goal, a,
+                                     seed=int_seed(self.seed, stage, index, attempt), budget_factor=factor)
+            self.result.times.planning_wall_s += motion.seconds
+            if motion.solved:
+                self.result.replanned += attempt
+                break
+        return motion
+
+    def track(self, path) -> None:
+        """Follow a joint path (its first row is the commanded configuration) and record it."""
+        path = np.asarray(path, dtype=float)
+        self.result.times.arm_s += self.cell.track(path[1:], self.params)
+        self.since_home.append(path)
+
+    def fold_home(self, i: int) -> bool:
+        """Fold the arm home before driving: plan (with the re-plan), else retrace the path
+        executed since home. False only if neither is possible (the arm never teleports)."""
+        cell, r = self.cell, self.result
+        motion = self.plan(cell.robot.q_home, "fold motion", i)
         if not motion.solved:
-            self.result.warnings.append(f"{what}: RRT-Connect failed ({motion.reason})")
-            return False
-        self.result.times.arm_s += self.cell.track(motion.path[1:], self.params)
+            r.fold_failures += 1
+            r.warnings.append(f"arm home before pose {i}: RRT-Connect failed ({motion.reason}), retracing")
+            back = self.retrace()
+            if back is None:
+                return False
+            motion = Motion(back, True, "retraced", 0.0)
+            r.folds_retraced += 1
+        self.track(motion.path)
+        self.since_home = []
         return True
 
+    def retrace(self) -> np.ndarray | None:
+        """(k, nq) the joint path executed since home, reversed (from the commanded
+        configuration to home), or None if there is none or it is no longer collision-free."""
+        if not self.since_home:
+            return None
+        back = np.vstack([p[::-1] for p in self.since_home[::-1]])
+        back = back[np.r_[True, np.any(np.diff(back, axis=0) != 0.0, axis=1)]]  # paths share ends
+        if len(back) < 2 or np.any(self.cell.checker.in_collision(back)):
+            return None
+        return back
+
     def drive_to(self, spot) -> None:
-        """Fold the arm (or teleport it home if no path exists, with a warning), drive the base."""
+        """Drive the base (arm folded) to ``spot`` (x, y, theta), along the shortest path around
+        the machine."""
         cell = self.cell
-        if not self.go_to(cell.robot.q_home, "arm home before driving"):
-            cell.sim.reset_q(cell.robot.q_home)
-            cell.q_cmd = np.array(cell.robot.q_home, dtype=float)
         start = cell.world_T_base[:2, 3]
         length = base_path_length(start, spot[:2], self.machine.footprint, self.params.base_clearance)
         self.result.times.base_s += length / self.params.base_speed
         cell.move_base(se2_to_matrix(*spot))
+
+    def skip(self, poses, why: str) -> None:
+        """Count ``poses`` (rows of T) as skipped; heaps in their planned view frustums are marked
+        so that a miss there has its cause."""
+        d, robot = self.params.detection, self.cell.robot
+        for pose in np.atleast_2d(poses):
+            world_T_camera = se2_to_matrix(*pose[:3]) @ fk(robot, pose[3:], robot.camera_frame) @ mavac_T_opencv()
+            seen = in_frustum(self.cell.dust.positions, world_T_camera, self.K, d.width, d.height, NEAR, FAR)
+            self.events.mark("in_skipped_view", np.flatnonzero(seen))
+        self.result.poses_skipped += len(np.atleast_2d(poses))
+        self.result.warnings.append(f"{why}: {len(np.atleast_2d(poses))} pose(s) skipped")
 
     def look(self):
         """RGB-D image from the camera where the arm really is; marks frustum/image ground truth."""
@@ -182,10 +273,14 @@ class _Run:
         self.events.mark("in_image", cell.dust.index_of_bodies(np.unique(seg)))
         return rgb, depth, world_T_camera
 
-    def inspect_and_clean(self, q_guard) -> None:
-        """Algorithm 1, lines 3-16 at one guard."""
-        if not self.go_to(q_guard, "guard"):
+    def inspect_and_clean(self, i: int, pose) -> None:
+        """Algorithm 1, lines 3-16 at pose ``i`` (a row of T: spot, then guard configuration)."""
+        motion = self.plan(pose[3:], "guard motion", i)
+        if not motion.solved:
+            self.result.guards_unreachable += 1
+            self.skip(pose, f"guard {i}: RRT-Connect failed ({motion.reason})")
             return
+        self.track(motion.path)
         self.result.guards += 1
         rgb, depth, world_T_camera = self.look()
         det = detect_dust(rgb, depth, self.K, world_T_camera, self.params.detection)
@@ -202,25 +297,28 @@ class _Run:
             self.result.filtered[name] += int(np.count_nonzero(why == name))
         kept = np.flatnonzero(why == "")
         a = self.params.approach
-        for area in areas_from_nodes(det.nodes[kept], eps=a.cluster_eps, min_samples=a.cluster_min_samples,
-                                     node_order=a.node_order, area_order=a.area_order):
-            self.clean_area(det.nodes[kept][area], heap_of[kept][area], world_T_guard_tool)
+        areas = areas_from_nodes(det.nodes[kept], eps=a.cluster_eps, min_samples=a.cluster_min_samples,
+                                 node_order=a.node_order, area_order=a.area_order)
+        for k, area in enumerate(areas):
+            self.clean_area((i, k), det.nodes[kept][area], heap_of[kept][area], world_T_guard_tool)
 
-    def clean_area(self, nodes, heaps, world_T_guard_tool) -> None:
-        """Approach (eq. 5), vacuum, return; records the heaps' fate."""
+    def clean_area(self, where, nodes, heaps, world_T_guard_tool) -> None:
+        """Approach (eq. 5), vacuum, return; records the heaps' fate. ``where`` is (pose, area)."""
         cell, p = self.cell, self.params
         self.result.areas += 1
-        rng = np.random.default_rng([self.seed, self.n_plans])
         approach = find_approach(cell.robot, cell.checker, cell.world_T_base, nodes, world_T_guard_tool, cell.q_cmd,
-                                 p.approach, rng=rng, seed=self._seed())
+                                 p.approach, rng=rng_for(self.seed, "approach", *where),
+                                 seed=int_seed(self.seed, "approach motion", *where))
         self.result.times.planning_wall_s += approach.planning_seconds
         self.result.rrt_approach_seconds += [a[2] for a in approach.attempts if a[1] != "no approach found"]
         if not approach.success:
             self.events.mark("no_approach" if approach.reason == "no approach found" else "planner_failed", heaps)
             return
-        self.result.times.arm_s += cell.track(approach.motion.path[1:], p)
+        self.track(approach.motion.path)
         order = np.r_[approach.node:len(nodes), 0:approach.node]  # start at the approached node
         self.events.mark("attempted", heaps)
+        # The vacuum moves end back at the approach configuration (Algorithm 1, line 13), so the
+        # recorded paths stay one chain from home.
         log = vacuum_area(cell, approach.world_T_approach, nodes[order], p.vacuum)
         self.vacuumed = np.vstack([self.vacuumed, nodes])
         self.result.times.vacuum_s += log.seconds
@@ -235,7 +333,7 @@ SHOULDER_LINK = "shoulder_link"
 
 def _empty_result(name: str, seed: int, heaps, reason: str) -> TrialResult:
     n = len(heaps)
-    causes = np.full(n, CAUSES[0], dtype="<U17")
+    causes = np.full(n, CAUSES[0], dtype=CAUSE_DTYPE)
     return TrialResult(name, seed, np.asarray(heaps).reshape(-1, 3), np.zeros(n, dtype=bool), causes, reason=reason)
 
 
@@ -250,18 +348,24 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     robot : RobotModel, optional
         The plan's robot (default :func:`mavac.robots.models.ur10_mobile`).
     params : OnlineParams, optional
-    seed : int, >= 0
-        Heap layout, orientation samples, IK restarts and RRT-Connect seeds.
+    seed : int, in [0, 2**31 - 1]
+        Heap layout, orientation samples, IK restarts and RRT-Connect seeds (checked once here;
+        every stream is spawned from it by :mod:`mavac.seeding`).
 
     Returns
     -------
     TrialResult
         No pybullet client stays connected, also when this raises.
+
+    Raises
+    ------
+    mavac.planning.rrt.PlanningTimeout
+        If a planner's wall-time safety net fires (the result would depend on the load).
     """
     t0 = time.perf_counter()
     check_instance("machine", machine, Machine)
     params = OnlineParams() if params is None else check_instance("params", params, OnlineParams)
-    seed = check_int("seed", seed, 0, 2**31 - 1)
+    seed = check_seed(seed)
     heaps = heaps_for_trial(machine, params.dust, seed)
     if not len(heaps):
         return _empty_result(machine.name, seed, heaps, "no heaps: the machine has no upward-facing surface")
@@ -272,14 +376,16 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     with SimWorld(time_step=params.time_step, seed=seed) as world:
         cell = build_cell(world, machine, robot, heaps, params, se2_to_matrix(*plan.poses[0, :3]))
         run = _Run(cell, machine, params, seed, result, plan.params.camera)
-        for i, pose in enumerate(plan.poses):
-            if i == 0 or plan.pose_spot[i] != plan.pose_spot[i - 1]:
-                run.drive_to(pose[:3])
-            run.inspect_and_clean(pose[3:])
+        run.execute(plan)
         result.cleaned = cell.dust.cleaned.copy()
+    _score(result, run)
+    result.wall_s = time.perf_counter() - t0
+    return result
+
+
+def _score(result: TrialResult, run: _Run) -> None:
+    """Recall, the cause of each miss, and the reason when nothing was detected."""
     result.recalled = int(np.count_nonzero(run.matched))
     result.causes = miss_causes(run.events, result.cleaned)
     if result.detected == 0:
         result.reason = "no dust detected from any guard pose"
-    result.wall_s = time.perf_counter() - t0
-    return result

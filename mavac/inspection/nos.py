@@ -344,6 +344,12 @@ def attempt_nos_guard(cluster: NoSCluster, spot: int, world_T_base, robot, check
         ``cluster, n_elements, spot, n_rays, ik, solved, reason, seconds``.
     q : (nq,) float or None
         The NoS guard configuration when RRT-Connect solved, else None.
+
+    Raises
+    ------
+    mavac.planning.rrt.PlanningTimeout
+        If the wall-time safety net ``params.rrt_time_limit`` fires before the iteration budget
+        ``params.rrt_max_iterations`` is spent (the plan would depend on the machine's load).
     """
     gw = cluster.best_gateway
     rays = gateway_rays(gw, params.max_ray_tries)
