@@ -368,7 +368,7 @@ def _cases_unnamed():
     from mavac.scrubbing.execution import cover_from_patches
     from mavac.scrubbing.lissajous import lissajous_force
     from mavac.setups.reach import base_T_part
-    from mavac.sim import wear
+    from mavac.scrubbing import wear
     from mavac.vision import camera, icp, stain
     from mavac.viz import meshcat_scene
 

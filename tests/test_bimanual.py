@@ -1,21 +1,22 @@
-"""The simulated two-arm cell (mavac.sim.bimanual) and the execution loop (mavac.scrubbing.bimanual)."""
+"""The simulated two-arm cell (mavac.scrubbing.scene, .scrub, .coupon)."""
 
 import numpy as np
 import pybullet as p
 import pytest
 
-from mavac.experiments.kabir_bimanual import PAPER_PARAMS, CouponCell, coupon_part
 from mavac.params import BimanualCellParams, ToolpathParams
-from mavac.scrubbing.bimanual import _approach, schedule_for_pass
+from mavac.scrubbing.cell import HOLDER_SEED, cell_robots, holder_ik
+from mavac.scrubbing.coupon import CouponCell, coupon_part
+from mavac.scrubbing.run import paper_lissajous
+from mavac.scrubbing.scene import move_holder, open_cell, world_T_part
+from mavac.scrubbing.scrub import Schedule, approach, check_force_limits, run_schedule, schedule_for_pass
 from mavac.scrubbing.toolpath import PassPath
+from mavac.scrubbing.wear import lissajous_from_vector
 from mavac.setups.reach import base_T_part
-from mavac.sim.bimanual import Schedule, check_force_limits, move_holder, open_cell, run_schedule, world_T_part
-from mavac.sim.cell import HOLDER_SEED, cell_robots, holder_ik
-from mavac.sim.wear import lissajous_from_vector
 from mavac.sim.world import SimWorld
 
 CELL = BimanualCellParams()
-BOWL = lissajous_from_vector(np.array([PAPER_PARAMS["bowl"]]))
+BOWL = paper_lissajous("bowl")
 
 
 def _connected() -> int:
@@ -26,7 +27,7 @@ def _stroke(seed=0):
     """Open the coupon cell, approach, run one 60 mm stroke with the paper's bowl parameters."""
     with CouponCell(CELL, seed=seed) as coupon:
         sched = schedule_for_pass(coupon.stroke, BOWL, ToolpathParams(), coupon.world.time_step)
-        _approach(coupon.cell, sched, 0.02, BOWL)
+        approach(coupon.cell, sched, 0.02, BOWL)
         log = run_schedule(coupon.cell, sched, stiffness=BOWL.kappa_x)
     return log
 
@@ -96,7 +97,7 @@ def test_no_client_left_after_a_raise():
     with pytest.raises(ValueError, match="lissajous"):
         with CouponCell(CELL) as coupon:
             sched = schedule_for_pass(coupon.stroke, huge, ToolpathParams(), coupon.world.time_step)
-            _approach(coupon.cell, sched, 0.02, huge)
+            approach(coupon.cell, sched, 0.02, huge)
     assert _connected() == before
 
 

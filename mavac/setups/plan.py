@@ -167,7 +167,7 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
     params : SetupPlanParams, optional
     feasible : callable, optional
         ``feasible(setups (k, 3)) -> (k,) bool``: setups that exist at all (e.g. the holding
-        arm of a two-arm cell can present the part there, :class:`mavac.setups.held.HeldSetups`);
+        arm of a two-arm cell can present the part there, :class:`mavac.scrubbing.holding.HeldSetups`);
         the others reach nothing and are dropped, and a warning says how many.
 
     Returns
