@@ -115,3 +115,31 @@ def test_schedule_alternates_contact_and_repositioning():
     free = s.positions[~s.contact]
     assert free[:, 2].max() == pytest.approx(0.02)  # lifted by the tool path's lift height
     assert np.allclose(s.rotations[s.contact][:, :, 2], [0.0, 0.0, -1.0])  # pad axis into the surface
+
+
+def test_run_part_validates_its_parameters_before_loading_anything():
+    from mavac.scrubbing.run import run_part
+
+    with pytest.raises(TypeError, match="cell"):
+        run_part("bowl", fast=True, cell=ToolpathParams())
+    with pytest.raises(TypeError, match="toolpath"):
+        run_part("bowl", fast=True, toolpath=CELL)
+    with pytest.raises(TypeError, match="lissajous"):
+        run_part("bowl", fast=True, lissajous=(0.3, 10.0, 5000.0, 7.0, 30.0))
+    with pytest.raises(ValueError, match="seed"):
+        run_part("bowl", fast=True, seed=-1)
+
+
+def test_cell_gains_limits_and_masses_are_parameters():
+    import dataclasses
+
+    from mavac.params import ScrubModel
+    from mavac.scrubbing.scrub import Gains
+
+    assert CELL.apparent_mass == ScrubModel().mass  # one home: the wear model's apparent mass
+    g = Gains.of(dataclasses.replace(CELL, apparent_mass=4 * CELL.apparent_mass), 5000.0)
+    assert g.d == pytest.approx(2 * Gains.of(CELL, 5000.0).d)
+    for name, bad in (("brake_torque", 0.0), ("park_margin", -0.1), ("setup_rrt_iterations", 0),
+                      ("wrist_inertia", -1.0), ("force_integral_limit", 0.0)):
+        with pytest.raises(ValueError, match=name):
+            dataclasses.replace(CELL, **{name: bad})
