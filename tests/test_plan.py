@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline, short_open_path
+from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline
+from mavac.planning.tour import short_open_path
 from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams)
 
 FAST = InspectionParams(
@@ -137,19 +138,6 @@ def test_unreachable_machine_gives_empty_plan(robot):
     assert plan.C == 0.0 and plan.O == 0.0
     assert plan.visible.shape == (0, len(plan.points))
     assert plan.warnings
-
-
-def test_short_open_path():
-    x = np.array([0.0, 5.0, 1.0, 3.0, 2.0, 4.0])
-    d = np.abs(x[:, None] - x[None])
-    order = short_open_path(d, 0)
-    assert x[order].tolist() == sorted(x.tolist())
-    rng = np.random.default_rng(0)
-    pts = rng.uniform(0, 1, (9, 2))
-    d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
-    order = short_open_path(d, 3)
-    assert order[0] == 3 and sorted(order.tolist()) == list(range(9))
-    assert short_open_path(np.zeros((0, 0))).size == 0
 
 
 def test_bad_input(ctx):

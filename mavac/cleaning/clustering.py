@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..inspection.plan import short_open_path
+from ..planning.tour import short_open_path
 from ..validate import check_int, check_positive
 
 
