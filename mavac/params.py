@@ -57,7 +57,7 @@ class CameraParams:
         check_range("hpr_radius_factor", self.hpr_radius_factor, 1.0, math.inf, lo_open=True)
 
 
-# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (read by mavac/scrubbing/lissajous.py, mavac/sim/wear.py, mavac/scrubbing/gpr.py) ----
+# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (read by mavac/scrubbing/lissajous.py, mavac/scrubbing/wear.py, mavac/scrubbing/gpr.py) ----
 
 # Order of the operation-parameter vector x used by the scrub model and the GPR learner
 # (Kabir, Sec. VIII: tool speed, normal force, stiffness, frequency, amplitude).
@@ -680,7 +680,7 @@ class NoSParams:
 
 @dataclass(frozen=True)
 class InspectionParams:
-    """Everything ``mavac.inspection.plan.plan_inspection`` needs (MAVAC offline computation)."""
+    """Everything ``mavac.inspection.inspection_plan.plan_inspection`` needs (MAVAC offline computation)."""
 
     # Ours: surface discretisation S, m (MAVAC discretises the surface into a point cloud;
     # dust heaps are 10 cm apart, S is twice as fine).
@@ -890,13 +890,13 @@ class OnlineParams:
         check_range("time_step", self.time_step, 0.0, 0.01, lo_open=True)
 
 
-# ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/plan.py) ----
+# ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/setup_plan.py) ----
 
 
 
 @dataclass(frozen=True)
 class SetupPlanParams:
-    """Everything ``mavac.setups.plan.plan_setups`` needs: setup space, reach test, candidate
+    """Everything ``mavac.setups.setup_plan.plan_setups`` needs: setup space, reach test, candidate
     sampling, cost model and planner (Kabir, Sections III-V)."""
 
     space: SetupSpaceParams = field(default_factory=SetupSpaceParams)
@@ -935,8 +935,8 @@ class SetupPlanParams:
             raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {self.method!r}")
 
 
-# ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/sim/cell.py, mavac/sim/bimanual.py,
-# mavac/scrubbing/bimanual.py) ----
+# ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/scrubbing/cell.py, scene.py, scrub.py,
+# holding.py, run.py) ----
 
 
 def _cell_space() -> SetupSpaceParams:
@@ -993,7 +993,7 @@ class BimanualCellParams:
     rot_stiffness: float = 150.0
     damping_ratio: float = 0.7
     # Ours: integral gain (1/s) of the explicit normal-force loop along tool z, tuned on the
-    # coupon stroke (tests/test_bimanual.py): 6/s left the mean contact force 36 % above f_n on
+    # coupon stroke (tests/test_scrub.py): 6/s left the mean contact force 36 % above f_n on
     # the bowl's parameters (pad bouncing off after landing), 100/s tracks it within ~1 %.
     force_gain: float = 100.0
     # Ours: pybullet friction coefficient pad/part, the wet sponge on plastic of ScrubModel.friction.

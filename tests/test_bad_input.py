@@ -223,7 +223,7 @@ def _plate_facing_table_plan():
     import warnings
 
     from mavac.geometry.parts import part_from_mesh
-    from mavac.setups.plan import plan_setups
+    from mavac.setups.setup_plan import plan_setups
 
     box = trimesh.creation.box(extents=[0.3, 0.2, 0.02])
     box.apply_translation([0, 0, 0.01])

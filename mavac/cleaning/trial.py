@@ -22,7 +22,7 @@ from ..geometry.machines import Machine
 from ..geometry.transforms import se2_to_matrix
 from ..params import OnlineParams
 from ..robots.models import ur10_mobile
-from ..sim.camera import intrinsics_from_fov, mavac_T_opencv, render_rgbd
+from ..sim.render import intrinsics_from_fov, mavac_T_opencv, render_rgbd
 from ..sim.world import SimWorld
 from ..validate import check_instance, check_int
 from .approach import find_approach
@@ -244,7 +244,7 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     Parameters
     ----------
     machine : Machine
-    plan : mavac.inspection.plan.InspectionPlan
+    plan : mavac.inspection.inspection_plan.InspectionPlan
         Offline plan of ``machine`` (spots, guards, NoS guards in execution order).
     robot : RobotModel, optional
         The plan's robot (default :func:`mavac.robots.models.ur10_mobile`).

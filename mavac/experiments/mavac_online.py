@@ -39,7 +39,7 @@ PAPER_MACHINES = {"test bench": "test_bench", "sanding and milling": COMBINED}
 
 def _plan(machine: str, params: InspectionParams):
     """Offline plan of one of the package's machines (module level: joblib caches it)."""
-    from ..inspection.plan import plan_inspection
+    from ..inspection.inspection_plan import plan_inspection
 
     return plan_inspection(load_machine(machine), params=params)
 

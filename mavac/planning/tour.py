@@ -1,7 +1,7 @@
 """A short open tour through points: nearest neighbour, then 2-opt (generic planning).
 
 MAVAC orders its spots, the guards of a spot and the dust areas of a view with it
-(:mod:`mavac.inspection.plan`, :mod:`mavac.cleaning.clustering`).
+(:mod:`mavac.inspection.inspection_plan`, :mod:`mavac.cleaning.clustering`).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ In the paper's cell one iiwa holds the part and changes setups, the other cleans
 ``(x, y, alpha)`` then exists only where the holding arm reaches the part pose with its
 flange (full-pose IK through the fixed grasp) and the part, held there, leaves room for both
 arms. :class:`HeldSetups` is that test as the ``feasible`` argument of
-:func:`mavac.setups.plan.plan_setups`: the planner drops every other candidate and says how
+:func:`mavac.setups.setup_plan.plan_setups`: the planner drops every other candidate and says how
 many and why. :func:`plan_cell_setups` plans with it; :func:`setup_configurations` gives the
 holding arm's configuration of each planned setup.
 """
@@ -17,8 +17,8 @@ import numpy as np
 from ..geometry.mesh import check_mesh
 from ..geometry.parts import Part
 from ..params import BimanualCellParams, ReachParams, SetupPlanParams
-from ..setups.plan import SetupPlan, plan_setups
 from ..setups.reach import base_T_part
+from ..setups.setup_plan import SetupPlan, plan_setups
 from ..validate import check_instance, check_points
 from .cell import holder_ik, part_clear_of_arms
 

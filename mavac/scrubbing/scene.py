@@ -215,7 +215,7 @@ def stain_overlay(cell: TwoArmCell, face_opacity, *, offset: float = 0.0015, lev
 
 def snapshot(cell: TwoArmCell, world_T_camera, *, width: int = 480, height: int = 360, fov_y_deg: float = 40.0) -> np.ndarray:
     """RGB image (h, w, 3) uint8 of the cell from pybullet's camera (OpenCV convention pose)."""
-    from ..sim.camera import render_rgbd
+    from ..sim.render import render_rgbd
 
     check_transform("world_T_camera", world_T_camera)
     rgb, _, _ = render_rgbd(cell.world.client, world_T_camera, width=width, height=height, fov_y_deg=fov_y_deg,

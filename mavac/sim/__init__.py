@@ -7,7 +7,7 @@
 * :mod:`mavac.sim.urdf` -- a URDF pybullet loads, written from a pinocchio robot model.
 * :mod:`mavac.sim.control` -- torque control with pinocchio dynamics: gravity compensation,
   joint PD, computed torque, Cartesian impedance, joint-trajectory tracking.
-* :mod:`mavac.sim.camera` -- RGB-D + segmentation images with the TinyRenderer, metric depth,
+* :mod:`mavac.sim.render` -- RGB-D + segmentation images with the TinyRenderer, metric depth,
   intrinsics from the field of view.
 
 The paper-specific scenes live with their loops: MAVAC's machine and dust heaps in

@@ -44,10 +44,10 @@ from ..viz.scenes import inspection_plan_html
 from . import guards as G
 from . import spots as SP
 from .coverage import cover_counts, coverage_overlap
-from .diagnose import LOW_COVERAGE, coverage_message, unobserved_causes
 from .nos import nos_guards, raycasting_scene
 from .reachability import reachability_map
 from .spots import SpotSelection
+from .unobserved import LOW_COVERAGE, coverage_message, unobserved_causes
 
 POSE_KINDS = ("guard", "nos")
 
@@ -560,7 +560,7 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
     Warns
     -----
     UserWarning
-        When C is below :data:`mavac.inspection.diagnose.LOW_COVERAGE`, with how many elements
+        When C is below :data:`mavac.inspection.unobserved.LOW_COVERAGE`, with how many elements
         are too high, too far or occluded (also in ``plan.warnings``).
     """
     ctx = prepare_offline(mesh_or_machine, robot=robot, params=params, rmap=rmap)
@@ -570,7 +570,7 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
 
 
 def warn_low_coverage(ctx: OfflineContext, plan: InspectionPlan, rmap=None) -> None:
-    """Append (and warn) the low-coverage message of :mod:`mavac.inspection.diagnose`, if any."""
+    """Append (and warn) the low-coverage message of :mod:`mavac.inspection.unobserved`, if any."""
     if plan.C >= LOW_COVERAGE:
         return
     message = coverage_message(plan.C, unobserved_causes(ctx, plan, rmap=rmap), plan.visibility)

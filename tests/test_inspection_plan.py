@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline
+from mavac.inspection.inspection_plan import plan_from_context, plan_inspection, prepare_offline
 from mavac.planning.tour import short_open_path
 from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams)
 
@@ -180,7 +180,7 @@ def test_camera_validation_reaches_inspection_params():
 
 
 def test_guards_of_later_spots_count_only_elements_not_seen_at_earlier_spots(ctx, plan):
-    from mavac.inspection.plan import guards_at_spots, spot_tour
+    from mavac.inspection.inspection_plan import guards_at_spots, spot_tour
 
     spots, rows = spot_tour(plan.spot_selection)
     assert np.array_equal(spots, plan.spots)
