@@ -328,7 +328,31 @@ class Execution:
 def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainState, lissajous: LissajousParams,
                   toolpath: ToolpathParams, rng: np.random.Generator, out: Execution, *, label: str,
                   snapshot=None, seed: int = 0) -> None:
-    """Move the part to a setup, scrub every pass of its tool path, look after each pass."""
+    """Move the part to a setup, scrub every pass of its tool path, look after each pass.
+
+    Parameters
+    ----------
+    cell : TwoArmCell
+    part : Part
+        The part (or its residue) being cleaned.
+    patches : (k,) int
+        Patches this setup cleans (``SetupPlan.patches[j]``).
+    q_holder : (7,) float, rad
+        Holding arm configuration of the setup.
+    state : StainState
+        Updated in place: each pass's measured removal, then the camera's look.
+    lissajous, toolpath : LissajousParams, ToolpathParams
+    rng : numpy.random.Generator
+        Process and pixel noise.
+    out : Execution
+        Appended to: setup time, rows, forces, tracks, images, snapshots.
+    label : str
+        Names the setup in rows and snapshots.
+    snapshot : callable, optional
+        ``snapshot(cell, state) -> (H, W, 3) uint8``, taken before and after each pass.
+    seed : int
+        OMPL seed of the setup motion.
+    """
     out.setup_times.append(move_holder(cell, q_holder, seed=seed))
     _keep(out, cell, "holder")
     T = world_T_part(cell)
