@@ -1,6 +1,6 @@
 """Kabir's two-arm cell: wall time of the whole simulated bowl run, and the 7-DOF reach-test IK.
 
-1. ``SECONDS bimanual_bowl <x>``: wall time of :func:`mavac.experiments.kabir_bimanual.run_part`
+1. ``SECONDS bimanual_bowl <x>``: wall time of :func:`mavac.scrubbing.run.run_part`
    on the bowl at paper scale (plan, hold, scrub, look, re-plan) with the paper's operating
    parameters (the learner is not part of it), on this machine.
 2. ``RATIO iiwa_batched_ik_vs_per_point <x>``: the reach test's position + axis IK of the iiwa
@@ -25,7 +25,7 @@ import pinocchio as pin
 
 from mavac.params import BimanualCellParams
 from mavac.robots import kinematics as K
-from mavac.sim.cell import cell_robots
+from mavac.scrubbing.cell import cell_robots
 
 from bench_ik import timed  # benchmarks run as scripts: their folder is on sys.path
 
@@ -90,7 +90,7 @@ def ik_ratio(n_targets: int = 5000, n_reference: int = 300) -> float:
 
 def bowl_seconds() -> float:
     """Wall time of the whole simulated bowl run at paper scale."""
-    from mavac.experiments.kabir_bimanual import run_part
+    from mavac.scrubbing.run import run_part
 
     t0 = time.perf_counter()
     run_part("bowl", fast=False)

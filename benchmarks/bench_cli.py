@@ -74,7 +74,7 @@ def _hpr_plan_rescored(path: Path, units: str, fast: bool) -> tuple[float, float
     from mavac.geometry.machines import machine_from_mesh
     from mavac.geometry.mesh import load_mesh
     from mavac.inspection.coverage import coverage_overlap
-    from mavac.inspection.plan import plan_inspection
+    from mavac.inspection.inspection_plan import plan_inspection
     from mavac.params import InspectionParams, Visibility
     from mavac.vision.visibility import VisibilityScene, visible_from
 

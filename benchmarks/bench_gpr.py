@@ -2,7 +2,7 @@
 against random search.
 
 For the paper's bowl and hull settings (C_p^th, P_th from data/paper_values.csv) and several
-seeds, both methods run on the SIMULATED scrub (mavac.sim.wear); we count the experiments
+seeds, both methods run on the SIMULATED scrub (mavac.scrubbing.wear); we count the experiments
 until the first point that is feasible (noise-free C_p >= C_p^th - 0.02) and within 0.05 of
 the objective of the dense-search optimum (``experiments_to_reach``). A run that never gets
 there counts as its budget + 1 (a lower bound for random search, a penalty for GPR).

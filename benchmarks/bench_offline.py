@@ -17,7 +17,7 @@ import numpy as np
 
 def main() -> None:
     from mavac.geometry.machines import test_bench
-    from mavac.inspection.plan import plan_from_context, prepare_offline
+    from mavac.inspection.inspection_plan import plan_from_context, prepare_offline
     from mavac.inspection.reachability import reachability_map
     from mavac.params import InspectionParams, Visibility
     from mavac.robots.models import ur10_mobile

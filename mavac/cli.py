@@ -85,7 +85,7 @@ def _inspection_params(args):
 def cmd_inspect(args) -> int:
     """MAVAC offline plan of a machine: spots, guards, NoS guards, the pose set T."""
     from .geometry.machines import machine_from_mesh
-    from .inspection.plan import plan_from_context, prepare_offline, warn_low_coverage
+    from .inspection.inspection_plan import plan_from_context, prepare_offline, warn_low_coverage
 
     stem = Path(args.mesh).stem
     out = _default(args.out, stem, "_plan.html")
@@ -127,7 +127,7 @@ def cmd_setups(args) -> int:
     """Kabir et al. setup plan of a stained part: fewest, fastest setups on the Puma 560."""
     from .geometry.stain_marking import mark_stain
     from .params import SetupPlanParams, SetupPlannerParams
-    from .setups.plan import plan_setups
+    from .setups.setup_plan import plan_setups
 
     stem = Path(args.part).stem
     out = _default(args.out, stem, "_setups.html")

@@ -48,7 +48,7 @@ class CameraParams:
         check_positive("L_d", self.L_d)
 
 
-# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (read by mavac/scrubbing/lissajous.py, mavac/sim/wear.py, mavac/scrubbing/gpr.py) ----
+# ---- Kabir: Lissajous scrubbing, simulated scrub model, GPR (read by mavac/scrubbing/lissajous.py, mavac/scrubbing/wear.py, mavac/scrubbing/gpr.py) ----
 
 # Order of the operation-parameter vector x used by the scrub model and the GPR learner
 # (Kabir, Sec. VIII: tool speed, normal force, stiffness, frequency, amplitude).
@@ -112,7 +112,7 @@ class LissajousParams:
 
 @dataclass(frozen=True)
 class ScrubModel:
-    """Constants of the SIMULATED scrubbing black box (``mavac.sim.wear``), which stands in
+    """Constants of the SIMULATED scrubbing black box (``mavac.scrubbing.wear``), which stands in
     for Kabir's physical cleaning experiments (Sec. IX-C). None of them is in the paper:
     they are round, physically plausible values for a sponge tool on a 7-DOF arm in
     Cartesian impedance mode, chosen so that C_p depends on all five operation parameters.
@@ -729,7 +729,7 @@ class NoSParams:
 
 @dataclass(frozen=True)
 class InspectionParams:
-    """Everything ``mavac.inspection.plan.plan_inspection`` needs (MAVAC offline computation)."""
+    """Everything ``mavac.inspection.inspection_plan.plan_inspection`` needs (MAVAC offline computation)."""
 
     # Ours: surface discretisation S, m (MAVAC discretises the surface into a point cloud;
     # dust heaps are 10 cm apart, S is twice as fine).
@@ -1012,7 +1012,7 @@ class OnlineParams:
         check_range("time_step", self.time_step, 0.0, 0.01, lo_open=True)
 
 
-# ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/plan.py) ----
+# ---- Kabir: plan_setups, the user-facing setup planner (read by mavac/setups/setup_plan.py) ----
 
 
 
@@ -1023,7 +1023,7 @@ SAMPLING_VARIANTS = ("none", "C_XY", "CA_XY", "C_XY_a", "CA_XY_a", "C_XYa", "CA_
 
 @dataclass(frozen=True)
 class SetupPlanParams:
-    """Everything ``mavac.setups.plan.plan_setups`` needs: setup space, reach test, candidate
+    """Everything ``mavac.setups.setup_plan.plan_setups`` needs: setup space, reach test, candidate
     sampling, cost model and planner (Kabir, Sections III-V)."""
 
     space: SetupSpaceParams = field(default_factory=SetupSpaceParams)
@@ -1061,8 +1061,8 @@ class SetupPlanParams:
             raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {self.method!r}")
 
 
-# ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/sim/cell.py, mavac/sim/bimanual.py,
-# mavac/scrubbing/bimanual.py) ----
+# ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/scrubbing/cell.py, scene.py, scrub.py,
+# holding.py, run.py) ----
 
 
 def _cell_space() -> SetupSpaceParams:
@@ -1119,7 +1119,7 @@ class BimanualCellParams:
     rot_stiffness: float = 150.0
     damping_ratio: float = 0.7
     # Ours: integral gain (1/s) of the explicit normal-force loop along tool z, tuned on the
-    # coupon stroke (tests/test_bimanual.py): 6/s left the mean contact force 36 % above f_n on
+    # coupon stroke (tests/test_scrub.py): 6/s left the mean contact force 36 % above f_n on
     # the bowl's parameters (pad bouncing off after landing), 100/s tracks it within ~1 %.
     force_gain: float = 100.0
     # Ours: pybullet friction coefficient pad/part, the wet sponge on plastic of ScrubModel.friction.
@@ -1139,12 +1139,48 @@ class BimanualCellParams:
     image_size: int = 128
     # Ours: the part counts as clean when the residue is below this fraction of its stained pixels.
     clean_residue: float = 0.02
+    # Apparent mass (kg) of the iiwa at the pad along the tool axes: the one value of
+    # ScrubModel.mass, which the impedance damping 2 zeta sqrt(kappa m) shares with the wear model.
+    apparent_mass: float = ScrubModel.mass
+    # Ours: apparent rotational inertia (kg m^2) of the wrist for the rotational damping
+    # 2 zeta sqrt(k_r I), about that of a 3 kg wrist at ~8 cm.
+    wrist_inertia: float = 0.02
+    # Ours: null-space posture stiffness (N m/rad) and damping (N m s/rad) of the redundant
+    # iiwa while scrubbing: weak, so the pull towards the start posture never fights the task.
+    null_stiffness: float = 2.0
+    null_damping: float = 0.1
+    # Ours: the normal-force integral is clipped to +-force_integral_limit x f_n (anti-windup
+    # while the pad lands or lifts).
+    force_integral_limit: float = 2.0
+    # pybullet_data's kuka_iiwa/model.urdf: joint effort 300 N m, the motor force of a braked arm.
+    brake_torque: float = 300.0
+    # Ours: the held part's rotational inertia is that of a sphere of this radius (m) and of
+    # part_mass; setup motions are slow, so the value barely matters.
+    part_inertia_radius: float = 0.1
+    # Ours: joint acceleration limit (rad/s^2) of setup and approach motions, cautious like
+    # joint_speed.
+    joint_acceleration: float = 1.0
+    # Ours: growth (m) of the box around the parked cleaning arm's link origins that the holding
+    # arm and its part avoid (the origins miss the links' ~6 cm radius).
+    park_margin: float = 0.08
+    # Ours: clearance (m) the held part keeps from both arms when a setup is tested (coal margin).
+    part_clearance: float = 0.005
+    # Ours: RRT-Connect budget of a setup motion. The iteration budget stops the search; the
+    # wall-clock cap (s) only turns a hang into an error (ENVIRONMENT: wall-clock limits make
+    # results load-dependent).
+    setup_rrt_iterations: int = 5000
+    setup_rrt_time_limit: float = 60.0
 
     def __post_init__(self):
         check_fields(self)
         for name in ("arm_separation", "grasp_offset", "part_mass", "tool_length", "time_step", "joint_speed",
-                     "kp", "kd", "rot_stiffness", "damping_ratio", "friction", "pad_stiffness", "pad_damping", "preston"):
+                     "kp", "kd", "rot_stiffness", "damping_ratio", "friction", "pad_stiffness", "pad_damping", "preston",
+                     "apparent_mass", "wrist_inertia", "null_stiffness", "null_damping", "force_integral_limit",
+                     "brake_torque", "part_inertia_radius", "joint_acceleration", "setup_rrt_time_limit"):
             check_positive(name, getattr(self, name))
+        check_nonnegative("park_margin", self.park_margin)
+        check_nonnegative("part_clearance", self.part_clearance)
+        check_int("setup_rrt_iterations", self.setup_rrt_iterations, 1)
         check_nonnegative("force_gain", self.force_gain)
         check_range("time_step", self.time_step, 0.0, 0.02, lo_open=True)
         check_int("max_rounds", self.max_rounds, 0, 20)

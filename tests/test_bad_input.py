@@ -223,7 +223,7 @@ def _plate_facing_table_plan():
     import warnings
 
     from mavac.geometry.parts import part_from_mesh
-    from mavac.setups.plan import plan_setups
+    from mavac.setups.setup_plan import plan_setups
 
     box = trimesh.creation.box(extents=[0.3, 0.2, 0.02])
     box.apply_translation([0, 0, 0.01])
@@ -368,7 +368,7 @@ def _cases_unnamed():
     from mavac.scrubbing.execution import cover_from_patches
     from mavac.scrubbing.lissajous import lissajous_force
     from mavac.setups.reach import base_T_part
-    from mavac.sim import wear
+    from mavac.scrubbing import wear
     from mavac.vision import camera, icp, stain
     from mavac.viz import meshcat_scene
 

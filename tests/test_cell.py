@@ -1,4 +1,4 @@
-"""The iiwa model, its batched 7-DOF IK and the two-arm cell's kinematics (mavac.sim.cell)."""
+"""The iiwa model, its batched 7-DOF IK and the two-arm cell's kinematics (mavac.scrubbing.cell, mavac.scrubbing.holding)."""
 
 import dataclasses
 import warnings
@@ -10,9 +10,9 @@ from mavac.geometry.parts import load_part
 from mavac.params import BimanualCellParams
 from mavac.robots import kinematics as K
 from mavac.robots.models import iiwa7, load_robot
-from mavac.setups.held import HeldSetups
+from mavac.scrubbing.cell import cell_robots, flange_T_part, holder_flange_targets, holder_ik
+from mavac.scrubbing.holding import HeldSetups
 from mavac.setups.reach import FeasibleReach, base_T_part
-from mavac.sim.cell import cell_robots, flange_T_part, holder_flange_targets, holder_ik
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ import trimesh
 from mavac.cleaning import trial as T
 from mavac.experiments.mavac_offline import fast_params
 from mavac.geometry.machines import machine_from_mesh
-from mavac.inspection.plan import PoseSet, plan_inspection
+from mavac.inspection.inspection_plan import PoseSet, plan_inspection
 from mavac.params import ApproachParams, DetectionParams, DustParams, OnlineParams
 
 PARAMS = OnlineParams(dust=DustParams(spacing=0.2))

@@ -14,7 +14,7 @@ from mavac.cleaning.misses import HeapEvents, cause_counts, in_frustum, miss_cau
 from mavac.cleaning.timing import TrialTimes, base_path_length
 from mavac.cleaning.vacuum import spiral_path
 from mavac.params import ApproachParams, DetectionParams, DustParams, OnlineParams, VacuumParams
-from mavac.sim.camera import intrinsics_from_fov
+from mavac.sim.render import intrinsics_from_fov
 
 
 def _image_with_two_blobs():

@@ -119,7 +119,7 @@ def test_reach_writes_a_heat_map_and_a_csv(files, tmp_path, capsys):
 
 
 def test_interrupt_exits_130_and_leaves_no_file(files, tmp_path, capsys, monkeypatch):
-    import mavac.setups.plan as plan_module
+    import mavac.setups.setup_plan as plan_module
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt

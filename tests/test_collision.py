@@ -105,3 +105,24 @@ def test_bad_inputs(ur10):
         checker.in_collision(np.zeros(3))
     with pytest.raises(ValueError, match="q contains NaN"):
         checker.in_collision(np.full(6, np.nan))
+
+
+def test_ignored_pairs_are_not_tested_and_the_margin_survives(ur10, box_at_tool):
+    folded = np.array([0.0, -1.46, 2.9, 0.0, 0.0, 0.0])
+    checker = CollisionChecker(ur10, box_at_tool, margin=0.01)
+    pairs = [p for p in checker.colliding_pairs(folded) if "obstacle" not in p]
+    n = checker.n_pairs
+    checker.ignore_pairs(pairs)
+    assert checker.n_pairs == n - len(pairs)
+    assert not any(p in checker.colliding_pairs(folded) for p in pairs)
+    checker.ignore_pairs(pairs)  # already ignored: nothing to do
+    assert checker.n_pairs == n - len(pairs)
+    # robot-vs-obstacle pairs keep their margin after the rebuild
+    tip = K.fk(ur10, ur10.q_home)[:3, 3]
+    box = trimesh.creation.box((0.2, 0.2, 0.2))
+    box.apply_translation(tip + [0.0, 0.3, 0.0])
+    padded = CollisionChecker(ur10, box, margin=0.5)
+    padded.ignore_pairs([("upper_arm_link_0", "mir200_base")])
+    assert padded.in_collision(ur10.q_home)
+    with pytest.raises(ValueError, match="pairs"):
+        checker.ignore_pairs([("upper_arm_link_0", "no_such_link")])

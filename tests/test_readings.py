@@ -77,7 +77,7 @@ def test_authors_reading_runs_a_trial_with_tip_filter_and_spiral():
     from mavac.cleaning.trial import run_trial
     from mavac.experiments.mavac_offline import fast_params
     from mavac.geometry.machines import machine_from_mesh
-    from mavac.inspection.plan import plan_inspection
+    from mavac.inspection.inspection_plan import plan_inspection
 
     machine = machine_from_mesh(trimesh.creation.box(bounds=[[-0.5, -0.3, 0.0], [0.5, 0.3, 0.6]]), name="box")
     with warnings.catch_warnings():

@@ -12,7 +12,7 @@ import umsgpack
 
 from mavac.experiments.mavac_offline import fast_params
 from mavac.geometry.machines import machine_from_mesh
-from mavac.inspection.plan import plan_inspection
+from mavac.inspection.inspection_plan import plan_inspection
 from mavac.viz import scenes
 from mavac.viz.screenshot import find_chromium, screenshot_html
 
@@ -83,7 +83,7 @@ def test_plan_page_frames_hides_rays_animates_and_has_a_legend(plan, plan_html):
 
 def test_setup_page_animates_the_part_through_its_setups(tmp_path):
     from mavac.geometry.stain_marking import mark_stain
-    from mavac.setups.plan import plan_setups
+    from mavac.setups.setup_plan import plan_setups
 
     part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 60), passes=1)
     plan = plan_setups(part)

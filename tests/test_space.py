@@ -12,9 +12,9 @@ import trimesh
 from mavac.geometry.parts import load_part, part_from_mesh
 from mavac.params import ReachParams, SetupPlanParams, SetupSpaceParams
 from mavac.robots.models import puma560
-from mavac.setups.plan import plan_setups
 from mavac.setups.reach import PartReach, below_support, reach_bound, reach_targets, reach_targets_from_part
 from mavac.setups.sampling import uniform_setups
+from mavac.setups.setup_plan import plan_setups
 from mavac.setups.space import part_radius, reaching_box, wide_setup_space
 
 ROBOT = puma560(tool_length=0.10)

@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from mavac.params import LissajousParams, ScrubModel
-from mavac.sim.wear import (ScrubExperiment, lissajous_from_vector, measure_cp, removal_depth,
+from mavac.scrubbing.wear import (ScrubExperiment, lissajous_from_vector, measure_cp, removal_depth,
                              removal_from_vector, scrub_faces, stain_hardness, stain_opacity,
                              vector_from_lissajous)
 

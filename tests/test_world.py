@@ -87,3 +87,29 @@ def test_robot_joints_follow_the_pinocchio_order_and_the_base_teleports():
             sim.link_index("no_such_link")
         with pytest.raises(ValueError, match="joint_names"):
             world.add_robot(robot_urdf(robot), joint_names=["nope"])
+
+
+def test_weld_contacts_brakes_and_velocity():
+    robot = ur10_mobile()
+    names = list(robot.model.names[1:])
+    with SimWorld(time_step=1 / 240) as world:
+        world.add_floor()
+        sim = world.add_robot(robot_urdf(robot), joint_names=names)
+        sim.reset_q(robot.q_home)
+        box = trimesh.creation.box((0.05, 0.05, 0.05))
+        body = world.add_dynamic_mesh(box.vertices, box.faces, mass=0.2, world_T_mesh=sim.world_T_link("tool0"))
+        link = sim.link_index("tool0")
+        assert world.weld(sim.body, link, body) >= 0
+        world.ignore_contacts(sim.body, body)
+        world.set_contact(body, friction=0.5, stiffness=1e4, damping=100.0)
+        sim.brake(robot.q_home, 300.0)
+        world.step(120)
+        lin, ang = world.body_velocity(body)
+        assert lin.shape == (3,) and ang.shape == (3,)
+        assert np.abs(sim.q() - robot.q_home).max() < 0.05  # the brakes hold the arm and its load
+        with pytest.raises(ValueError, match="together"):
+            world.set_contact(body, friction=0.5, stiffness=1e4)
+        with pytest.raises(ValueError, match="parent_position"):
+            world.weld(sim.body, link, body, parent_position=(0.0, 0.0))
+        with pytest.raises(ValueError, match="max_torque"):
+            sim.brake(robot.q_home, 0.0)

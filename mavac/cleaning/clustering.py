@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..inspection.plan import short_open_path
+from ..planning.tour import short_open_path
 from ..validate import check_int, check_positive
 
 #: Ours: largest node count solved exactly (Held-Karp, O(2^n n^2): 16 nodes take ~10 ms here).

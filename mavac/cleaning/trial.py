@@ -37,7 +37,7 @@ from ..params import OnlineParams
 from ..robots.kinematics import fk
 from ..robots.models import ur10_mobile
 from ..seeding import check_seed, int_seed, rng_for
-from ..sim.camera import intrinsics_from_fov, mavac_T_opencv, render_rgbd
+from ..sim.render import intrinsics_from_fov, mavac_T_opencv, render_rgbd
 from ..sim.world import SimWorld
 from ..validate import check_instance
 from .approach import find_approach
@@ -343,7 +343,7 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     Parameters
     ----------
     machine : Machine
-    plan : mavac.inspection.plan.InspectionPlan
+    plan : mavac.inspection.inspection_plan.InspectionPlan
         Offline plan of ``machine`` (spots, guards, NoS guards in execution order).
     robot : RobotModel, optional
         The plan's robot (default :func:`mavac.robots.models.ur10_mobile`).

@@ -4,7 +4,7 @@ Tables for ``notebooks/10_gpr_parameters.ipynb``: GPR and random search over see
 bowl (``C_p^th``, ``P_th`` of the paper's bowl) and the hull settings, the true optimum of
 the noise-free simulated model, learning curves and the paper-vs-ours table. The thresholds
 are read from ``data/paper_values.csv``. The cleaning physics is our simulated model
-(:mod:`mavac.sim.wear`), so the learned parameters are not expected to match the paper's.
+(:mod:`mavac.scrubbing.wear`), so the learned parameters are not expected to match the paper's.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from ..parallel import map_trials
 from ..params import OPERATION_PARAMS, GPRParams
 from ..scrubbing import execution
 from ..scrubbing.gpr import dense_optimum, experiments_to_reach, learn_parameters, objective, random_search
-from ..sim.wear import ScrubExperiment
+from ..scrubbing.wear import ScrubExperiment
 
 PARTS = ("bowl", "hull")
 _REF = "Sec. IX-C GPR"

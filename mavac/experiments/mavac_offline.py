@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..geometry.machines import MACHINE_NAMES, load_machine
 from ..inspection.coverage import coverage_overlap
-from ..inspection.plan import guards_at_spots, plan_from_context, plan_inspection, prepare_offline, spot_tour, surface_elements
+from ..inspection.inspection_plan import guards_at_spots, plan_from_context, plan_inspection, prepare_offline, spot_tour, surface_elements
 from ..inspection.spots import candidate_spots, select_spots, spot_viewpoints
 from ..paper import paper_scalar, paper_table, paper_values
 from ..parallel import map_trials
@@ -467,7 +467,7 @@ def plot_hpr_radius(sweep: pd.DataFrame):
 
 
 def plan_machine(machine: str, params: InspectionParams | None = None, progress: bool = False):
-    """:func:`mavac.inspection.plan.plan_inspection` on one of the package's machines."""
+    """:func:`mavac.inspection.inspection_plan.plan_inspection` on one of the package's machines."""
     return plan_inspection(load_machine(machine), params=params, progress=progress)
 
 

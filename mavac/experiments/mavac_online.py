@@ -46,7 +46,7 @@ FAST_POSES = 10
 
 def _plan(scene: str, params: InspectionParams):
     """Offline plan of one of the package's scenes (module level: joblib caches it)."""
-    from ..inspection.plan import plan_inspection
+    from ..inspection.inspection_plan import plan_inspection
 
     return plan_inspection(load_machine(scene), params=params)
 

@@ -15,7 +15,7 @@ A part exported from CAD has no stain and often large triangles, so this module
   T-junctions, which neither the reach test nor ray casting minds).
 
 :func:`mark_stain` returns a :class:`mavac.geometry.parts.Part` ready for
-:func:`mavac.setups.plan.plan_setups`; :func:`parse_stain` reads the command line's ``--stain``.
+:func:`mavac.setups.setup_plan.plan_setups`; :func:`parse_stain` reads the command line's ``--stain``.
 """
 
 from __future__ import annotations

@@ -374,7 +374,7 @@ def nos_guards(ctx, spots, observed, params: InspectionParams) -> tuple[list, li
 
     Parameters
     ----------
-    ctx : mavac.inspection.plan.OfflineContext
+    ctx : mavac.inspection.inspection_plan.OfflineContext
         Machine mesh, robot, collision checker, S and its scenes.
     spots : (k, 3) float
         Spots in tour order; a cluster is tried from the spot along its exit direction

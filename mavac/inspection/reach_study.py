@@ -8,7 +8,7 @@ the workpiece surface, solves IK for each, scores every solution with an evaluat
   normal at the guard stand-off (the detection limit ``L_d`` unless ``GuardParams.standoff``),
   looking back at it (MAVAC, "Local exploration");
 * robot placements: every collision-free candidate spot of the offline pipeline
-  (:func:`mavac.inspection.plan.prepare_offline`), the reachability map as a prefilter;
+  (:func:`mavac.inspection.inspection_plan.prepare_offline`), the reachability map as a prefilter;
 * IK: collision-free camera IK (:func:`mavac.inspection.guards.camera_configurations`);
 * evaluator: the maneuverability index I_m of the configuration (MAVAC eq. 4, Vahrenkamp et al.),
   times 1 if the camera actually sees the element from there (``params.visibility``: ray casting
@@ -32,7 +32,7 @@ from ..params import InspectionParams
 from ..robots.kinematics import maneuverability
 from ..viz.scenes import reach_study_html
 from .guards import camera_configurations
-from .plan import prepare_offline
+from .inspection_plan import prepare_offline
 from .reachability import reachability_map
 from .spots import se2_matrices
 

@@ -68,7 +68,6 @@ class CollisionChecker:
                 ja, jb = gm.geometryObjects[a].parentJoint, gm.geometryObjects[b].parentJoint
                 if ja != jb and parents[ja] != jb and parents[jb] != ja:
                     gm.addCollisionPair(pin.CollisionPair(a, b))
-        self._self_pairs = len(gm.collisionPairs)
         self._world_ids = []
         if obstacle is not None:
             oid = gm.addGeometryObject(pin.GeometryObject(_OBSTACLE, 0, 0, pin.SE3.Identity(), bvh_from_mesh(obstacle)))
@@ -85,10 +84,37 @@ class CollisionChecker:
                     gm.addCollisionPair(pin.CollisionPair(a, fid))
         self.geometry_model = gm
         self._data = model.createData()
-        self._gdata = pin.GeometryData(gm)
-        for k in range(self._self_pairs, len(gm.collisionPairs)):
-            self._gdata.collisionRequests[k].security_margin = self.margin
+        self._new_geometry_data()
         self.set_base(world_T_base)
+
+    def _new_geometry_data(self) -> None:
+        """Fresh coal data for the current pairs; the margin applies to robot-vs-world pairs."""
+        gm = self.geometry_model
+        self._gdata = pin.GeometryData(gm)
+        world = {gid for gid, _ in self._world_ids}
+        for k, cp in enumerate(gm.collisionPairs):
+            if cp.first in world or cp.second in world:
+                self._gdata.collisionRequests[k].security_margin = self.margin
+
+    def ignore_pairs(self, pairs) -> None:
+        """Stop testing the named geometry pairs, e.g. a held part and the flange it sits on.
+
+        Parameters
+        ----------
+        pairs : iterable of (str, str)
+            Geometry object names; a pair that is not tested is skipped, an unknown name is a
+            ``ValueError``.
+        """
+        gm = self.geometry_model
+        n = len(gm.geometryObjects)
+        for a, b in pairs:
+            ids = [gm.getGeometryId(str(name)) for name in (a, b)]
+            for name, i in zip((a, b), ids):
+                if i >= n:
+                    raise ValueError(f"pairs: no geometry object named {name!r}")
+            if gm.existCollisionPair(pin.CollisionPair(*ids)):
+                gm.removeCollisionPair(pin.CollisionPair(*ids))
+        self._new_geometry_data()
 
     @property
     def n_pairs(self) -> int:

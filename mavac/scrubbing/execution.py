@@ -9,7 +9,7 @@
 * :func:`scrub_experiment` -- the simulated black box of the GPR learner (Sec. VIII) for a part.
 
 The perception itself (rendering, K-means, C_p, quantisation) is shared and lives in
-:mod:`mavac.vision.stain`; the wear model in :mod:`mavac.sim.wear`.
+:mod:`mavac.vision.stain`; the wear model in :mod:`mavac.scrubbing.wear`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 
 from ..params import LissajousParams, ScrubModel, SetupSpaceParams, ToolpathParams
 from ..setups.reach import base_T_part
-from ..sim.wear import ScrubExperiment, render_stain_states, scrub_faces, stain_hardness
+from .wear import ScrubExperiment, render_stain_states, scrub_faces, stain_hardness
 from ..validate import check_indices, check_int, check_points
 from ..vision.stain import (cleaning_performance, face_index_image, passes_from_image, stain_masks_kmeans,
                             view_of_faces)
@@ -104,7 +104,7 @@ def perceive_scrub_pass(part, rng: np.random.Generator, *, lissajous: LissajousP
     """One SIMULATED scrubbing pass seen by the camera, segmented like Kabir Sec. VII.
 
     The stain (per-face intensity, as thickness in layers) is rendered before and after
-    :func:`mavac.sim.wear.scrub_faces`; one 2-cluster K-means gives both binary masks and
+    :func:`mavac.scrubbing.wear.scrub_faces`; one 2-cluster K-means gives both binary masks and
     ``C_p`` over the stained region; ``N_c``-colour quantisation of the before image (3x3
     median filtered against pixel noise, as the binary masks are) gives the passes per pixel
     (Fig. 5), compared with the part's own passes (pixels of stained faces; the clean part
@@ -144,7 +144,7 @@ def perceive_scrub_pass(part, rng: np.random.Generator, *, lissajous: LissajousP
 def scrub_experiment(part, rng: np.random.Generator, *, model: ScrubModel = ScrubModel()) -> ScrubExperiment:
     """The SIMULATED black box of the GPR learner for ``part``: its stain (intensity as
     thickness in layers) and a per-face hardness drawn from ``rng``
-    (:func:`mavac.sim.wear.stain_hardness`)."""
+    (:func:`mavac.scrubbing.wear.stain_hardness`)."""
     face_stain = _face_values(part, np.asarray(part.intensity, dtype=float))
     hardness = stain_hardness(len(face_stain), rng, model)
     return ScrubExperiment(part.mesh, face_stain, hardness)

@@ -33,7 +33,7 @@ probability ``>= P_th`` -> infeasible. With a small ``P_th`` (the paper's bowl u
 answer is deliberately optimistic: it approaches the threshold from slightly below.
 
 An ``experiment`` is any callable ``experiment(x (5,), rng) -> C_p``; if it also has
-``mean(X (n, 5)) -> (n,)`` (a noise-free model, as :class:`mavac.sim.wear.ScrubExperiment`)
+``mean(X (n, 5)) -> (n,)`` (a noise-free model, as :class:`mavac.scrubbing.wear.ScrubExperiment`)
 the history records it as ``C_p_mean`` for evaluation only -- the learner never reads it.
 """
 

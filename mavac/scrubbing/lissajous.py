@@ -6,7 +6,7 @@ The scrubbing action is a force oscillation in the XY plane of the tool frame,
 
 while the cleaning force ``f_n`` pushes along tool z (into the surface). Under Cartesian
 impedance control with stiffness ``kappa`` the tool deviates from the nominal path by
-``F / kappa`` (quasi-static; the dynamic response lives in :mod:`mavac.sim.wear`).
+``F / kappa`` (quasi-static; the dynamic response lives in :mod:`mavac.scrubbing.wear`).
 
 Tool frame (README, Conventions): z is the tool axis pointing into the surface (``z = -n`` for the
 outward normal ``n``); we put x along the direction of travel, y = z x x.

@@ -338,7 +338,7 @@ class FeasibleReach:
 
     Used when something other than the reach test decides whether a setup exists at all, e.g.
     the holding arm of a two-arm cell must present the part there
-    (:class:`mavac.setups.held.HeldSetups`): a refused setup covers no patch, so the planner
+    (:class:`mavac.scrubbing.holding.HeldSetups`): a refused setup covers no patch, so the planner
     drops it; ``dropped`` counts the refused setups (each asked once through
     :class:`CountingReach`).
 

@@ -57,7 +57,7 @@ def setup_motion(robot, part, plan, base_T_parts):
 
 
 def setup_plan_html(plan, part, path, robot=None, params=None):
-    """Meshcat page of a :class:`~mavac.setups.plan.SetupPlan`: the Puma 560, the table, the part
+    """Meshcat page of a :class:`~mavac.setups.setup_plan.SetupPlan`: the Puma 560, the table, the part
     moved through its setups in order, the arm touching a patch of each; stain patches coloured by
     the setup that cleans them (unreachable ones red)."""
     params = SetupPlanParams() if params is None else params

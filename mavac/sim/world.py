@@ -277,6 +277,46 @@ class SimWorld:
         pos, quat = self._p.getBasePositionAndOrientation(int(body), physicsClientId=self.client)
         return _matrix_from_pose(pos, quat)
 
+    def body_velocity(self, body: int) -> tuple[np.ndarray, np.ndarray]:
+        """Linear (3,) m/s and angular (3,) rad/s velocity of a body's base, world frame."""
+        self._check_open()
+        lin, ang = self._p.getBaseVelocity(int(body), physicsClientId=self.client)
+        return np.asarray(lin, dtype=float), np.asarray(ang, dtype=float)
+
+    # ---- constraints and contact properties ----
+    def weld(self, parent: int, parent_link: int, child: int, *, parent_position=(0.0, 0.0, 0.0)) -> int:
+        """Fix ``child``'s base to link ``parent_link`` of ``parent`` (a pybullet fixed
+        constraint, e.g. a grasp), its origin at ``parent_position`` (3,) m in the link frame.
+        Returns the constraint id."""
+        self._check_open()
+        offset = check_array("parent_position", parent_position, float)
+        if offset.shape != (3,):
+            raise ValueError(f"parent_position must have shape (3,), got {offset.shape}")
+        p = self._p
+        return p.createConstraint(int(parent), int(parent_link), int(child), -1, p.JOINT_FIXED, [0, 0, 0],
+                                  offset.tolist(), [0, 0, 0], physicsClientId=self.client)
+
+    def ignore_contacts(self, body_a: int, body_b: int) -> None:
+        """No contact between any link of ``body_a`` and the base of ``body_b`` (a held body
+        touches its gripper by construction)."""
+        self._check_open()
+        p, c = self._p, self.client
+        for link in range(-1, p.getNumJoints(int(body_a), physicsClientId=c)):
+            p.setCollisionFilterPair(int(body_a), int(body_b), link, -1, 0, physicsClientId=c)
+
+    def set_contact(self, body: int, link: int = -1, *, friction: float, stiffness: float | None = None,
+                    damping: float | None = None) -> None:
+        """Contact properties of one link (``-1``: the base): Coulomb ``friction`` and,
+        together, a compliant contact's ``stiffness`` (N/m) and ``damping`` (N s/m)."""
+        self._check_open()
+        kwargs = {"lateralFriction": float(check_positive("friction", friction))}
+        if (stiffness is None) != (damping is None):
+            raise ValueError("stiffness and damping must be given together (a compliant contact needs both)")
+        if stiffness is not None:
+            kwargs.update(contactStiffness=float(check_positive("stiffness", stiffness)),
+                          contactDamping=float(check_positive("damping", damping)))
+        self._p.changeDynamics(int(body), int(link), physicsClientId=self.client, **kwargs)
+
 
 class SimRobot:
     """A robot loaded in a :class:`SimWorld`, addressed by the names of its pinocchio model.
@@ -345,6 +385,15 @@ class SimRobot:
         p = self.world._p
         p.setJointMotorControlArray(self.body, self.joint_indices, p.VELOCITY_CONTROL,
                                     forces=[0.0] * len(self.joint_indices), physicsClientId=self._c)
+
+    def brake(self, q, max_torque: float) -> None:
+        """Hold the joints at ``q`` (nq,) rad with pybullet's position motors, each limited to
+        ``max_torque`` N m (an arm waiting on its brakes)."""
+        a = self._check_q("q", q)
+        check_positive("max_torque", max_torque)
+        p = self.world._p
+        p.setJointMotorControlArray(self.body, self.joint_indices, p.POSITION_CONTROL, targetPositions=a.tolist(),
+                                    forces=[float(max_torque)] * len(a), physicsClientId=self._c)
 
     def apply_torques(self, tau) -> None:
         """Joint torques (N m) for the next step (``TORQUE_CONTROL``)."""

@@ -33,7 +33,7 @@ def back_project(uv, depth, K, world_T_camera=None) -> np.ndarray:
     depth : (n,) float, metres
         Depth along the optical axis, finite and > 0.
     K : (3, 3) float
-        Intrinsics (:func:`mavac.sim.camera.intrinsics_from_fov`).
+        Intrinsics (:func:`mavac.sim.render.intrinsics_from_fov`).
     world_T_camera : (4, 4) float, optional
         Camera pose (OpenCV convention); default: points in the camera frame.
 

@@ -104,7 +104,7 @@ def frame_box(lo, hi, points=()):
 
 
 def inspection_plan_html(plan, path, robot=None):
-    """Meshcat page of an :class:`~mavac.inspection.plan.InspectionPlan`.
+    """Meshcat page of an :class:`~mavac.inspection.inspection_plan.InspectionPlan`.
 
     Shows the machine, observed (green) and unobserved (red) elements of S, the spots (large RGB
     triads) and camera poses (small triads; NoS guards also as orange dots), and the robot going

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline, short_open_path
+from mavac.inspection.inspection_plan import plan_from_context, plan_inspection, prepare_offline
+from mavac.planning.tour import short_open_path
 from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams, Visibility)
 
 FAST = InspectionParams(
@@ -139,19 +140,6 @@ def test_unreachable_machine_gives_empty_plan(robot):
     assert plan.warnings
 
 
-def test_short_open_path():
-    x = np.array([0.0, 5.0, 1.0, 3.0, 2.0, 4.0])
-    d = np.abs(x[:, None] - x[None])
-    order = short_open_path(d, 0)
-    assert x[order].tolist() == sorted(x.tolist())
-    rng = np.random.default_rng(0)
-    pts = rng.uniform(0, 1, (9, 2))
-    d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
-    order = short_open_path(d, 3)
-    assert order[0] == 3 and sorted(order.tolist()) == list(range(9))
-    assert short_open_path(np.zeros((0, 0))).size == 0
-
-
 def test_bad_input(ctx):
     with pytest.raises(ValueError, match="mesh_or_machine"):
         plan_inspection("test_bench")
@@ -194,7 +182,7 @@ def test_camera_validation_reaches_inspection_params():
 
 
 def test_guards_of_later_spots_count_only_elements_not_seen_at_earlier_spots(ctx, plan):
-    from mavac.inspection.plan import guards_at_spots, spot_tour
+    from mavac.inspection.inspection_plan import guards_at_spots, spot_tour
 
     spots, rows = spot_tour(plan.spot_selection)
     assert np.array_equal(spots, plan.spots)

@@ -1,21 +1,22 @@
-"""The simulated two-arm cell (mavac.sim.bimanual) and the execution loop (mavac.scrubbing.bimanual)."""
+"""The simulated two-arm cell (mavac.scrubbing.scene, .scrub, .coupon)."""
 
 import numpy as np
 import pybullet as p
 import pytest
 
-from mavac.experiments.kabir_bimanual import PAPER_PARAMS, CouponCell, coupon_part
 from mavac.params import BimanualCellParams, ToolpathParams
-from mavac.scrubbing.bimanual import _approach, schedule_for_pass
+from mavac.scrubbing.cell import HOLDER_SEED, cell_robots, holder_ik
+from mavac.scrubbing.coupon import CouponCell, coupon_part
+from mavac.scrubbing.run import paper_lissajous
+from mavac.scrubbing.scene import move_holder, open_cell, world_T_part
+from mavac.scrubbing.scrub import Schedule, approach, check_force_limits, run_schedule, schedule_for_pass
 from mavac.scrubbing.toolpath import PassPath
+from mavac.scrubbing.wear import lissajous_from_vector
 from mavac.setups.reach import base_T_part
-from mavac.sim.bimanual import Schedule, check_force_limits, move_holder, open_cell, run_schedule, world_T_part
-from mavac.sim.cell import HOLDER_SEED, cell_robots, holder_ik
-from mavac.sim.wear import lissajous_from_vector
 from mavac.sim.world import SimWorld
 
 CELL = BimanualCellParams()
-BOWL = lissajous_from_vector(np.array([PAPER_PARAMS["bowl"]]))
+BOWL = paper_lissajous("bowl")
 
 
 def _connected() -> int:
@@ -26,7 +27,7 @@ def _stroke(seed=0):
     """Open the coupon cell, approach, run one 60 mm stroke with the paper's bowl parameters."""
     with CouponCell(CELL, seed=seed) as coupon:
         sched = schedule_for_pass(coupon.stroke, BOWL, ToolpathParams(), coupon.world.time_step)
-        _approach(coupon.cell, sched, 0.02, BOWL)
+        approach(coupon.cell, sched, 0.02, BOWL)
         log = run_schedule(coupon.cell, sched, stiffness=BOWL.kappa_x)
     return log
 
@@ -96,7 +97,7 @@ def test_no_client_left_after_a_raise():
     with pytest.raises(ValueError, match="lissajous"):
         with CouponCell(CELL) as coupon:
             sched = schedule_for_pass(coupon.stroke, huge, ToolpathParams(), coupon.world.time_step)
-            _approach(coupon.cell, sched, 0.02, huge)
+            approach(coupon.cell, sched, 0.02, huge)
     assert _connected() == before
 
 
@@ -114,3 +115,31 @@ def test_schedule_alternates_contact_and_repositioning():
     free = s.positions[~s.contact]
     assert free[:, 2].max() == pytest.approx(0.02)  # lifted by the tool path's lift height
     assert np.allclose(s.rotations[s.contact][:, :, 2], [0.0, 0.0, -1.0])  # pad axis into the surface
+
+
+def test_run_part_validates_its_parameters_before_loading_anything():
+    from mavac.scrubbing.run import run_part
+
+    with pytest.raises(TypeError, match="cell"):
+        run_part("bowl", fast=True, cell=ToolpathParams())
+    with pytest.raises(TypeError, match="toolpath"):
+        run_part("bowl", fast=True, toolpath=CELL)
+    with pytest.raises(TypeError, match="lissajous"):
+        run_part("bowl", fast=True, lissajous=(0.3, 10.0, 5000.0, 7.0, 30.0))
+    with pytest.raises(ValueError, match="seed"):
+        run_part("bowl", fast=True, seed=-1)
+
+
+def test_cell_gains_limits_and_masses_are_parameters():
+    import dataclasses
+
+    from mavac.params import ScrubModel
+    from mavac.scrubbing.scrub import Gains
+
+    assert CELL.apparent_mass == ScrubModel().mass  # one home: the wear model's apparent mass
+    g = Gains.of(dataclasses.replace(CELL, apparent_mass=4 * CELL.apparent_mass), 5000.0)
+    assert g.d == pytest.approx(2 * Gains.of(CELL, 5000.0).d)
+    for name, bad in (("brake_torque", 0.0), ("park_margin", -0.1), ("setup_rrt_iterations", 0),
+                      ("wrist_inertia", -1.0), ("force_integral_limit", 0.0)):
+        with pytest.raises(ValueError, match=name):
+            dataclasses.replace(CELL, **{name: bad})

@@ -36,66 +36,21 @@ from ..geometry.surface import sample_surface
 from ..geometry.transforms import se2_matrices
 from ..io import write_json
 from ..params import InspectionParams
+from ..planning.tour import short_open_path
 from ..robots.collision import CollisionChecker
 from ..robots.kinematics import maneuverability
 from ..robots.models import ur10_mobile
-from ..tolerances import TOUR_GAIN_TOL
 from ..vision.visibility import VisibilityScene
 from ..viz.scenes import inspection_plan_html
 from . import guards as G
 from . import spots as SP
 from .coverage import cover_counts, coverage_overlap
-from .diagnose import LOW_COVERAGE, coverage_message, unobserved_causes
 from .nos import nos_guards, raycasting_scene
 from .reachability import reachability_map
 from .spots import SpotSelection
+from .unobserved import LOW_COVERAGE, coverage_message, unobserved_causes
 
 POSE_KINDS = ("guard", "nos")
-
-
-def short_open_path(dist, start: int = 0) -> np.ndarray:
-    """A short open path through all nodes from ``start``: nearest neighbour, then 2-opt.
-
-    Parameters
-    ----------
-    dist : (k, k) float
-        Symmetric distances.
-    start : int
-        First node (kept first).
-
-    Returns
-    -------
-    (k,) int
-        Visiting order, deterministic (ties by lowest index).
-    """
-    d = np.asarray(dist, dtype=float)
-    k = len(d)
-    if d.shape != (k, k):
-        raise ValueError(f"dist must be square, got {d.shape}")
-    if k == 0:
-        return np.zeros(0, dtype=np.int64)
-    if not 0 <= start < k:
-        raise ValueError(f"start must be in [0, {k - 1}], got {start}")
-    order = [start]
-    left = np.ones(k, dtype=bool)
-    left[start] = False
-    while left.any():
-        cand = np.flatnonzero(left)
-        nxt = int(cand[np.argmin(d[order[-1], cand])])
-        order.append(nxt)
-        left[nxt] = False
-    p = np.array(order)
-    improved = True
-    while improved:
-        improved = False
-        for i in range(1, k - 1):
-            for j in range(i + 1, k):
-                before = d[p[i - 1], p[i]] + (d[p[j], p[j + 1]] if j + 1 < k else 0.0)
-                after = d[p[i - 1], p[j]] + (d[p[i], p[j + 1]] if j + 1 < k else 0.0)
-                if after < before - TOUR_GAIN_TOL:
-                    p[i:j + 1] = p[i:j + 1][::-1].copy()
-                    improved = True
-    return p
 
 
 @dataclass(frozen=True)
@@ -606,7 +561,7 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
     Warns
     -----
     UserWarning
-        When C is below :data:`mavac.inspection.diagnose.LOW_COVERAGE`, with how many elements
+        When C is below :data:`mavac.inspection.unobserved.LOW_COVERAGE`, with how many elements
         are too high, too far or occluded (also in ``plan.warnings``).
     """
     ctx = prepare_offline(mesh_or_machine, robot=robot, params=params, rmap=rmap)
@@ -616,7 +571,7 @@ def plan_inspection(mesh_or_machine, *, robot=None, params: InspectionParams | N
 
 
 def warn_low_coverage(ctx: OfflineContext, plan: InspectionPlan, rmap=None) -> None:
-    """Append (and warn) the low-coverage message of :mod:`mavac.inspection.diagnose`, if any."""
+    """Append (and warn) the low-coverage message of :mod:`mavac.inspection.unobserved`, if any."""
     if plan.C >= LOW_COVERAGE:
         return
     message = coverage_message(plan.C, unobserved_causes(ctx, plan, rmap=rmap), plan.visibility)

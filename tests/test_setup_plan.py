@@ -10,7 +10,7 @@ import pytest
 from mavac.geometry.parts import load_part
 from mavac.params import SetupPlannerParams, SetupPlanParams
 from mavac.robots.models import puma560
-from mavac.setups.plan import plan_setups
+from mavac.setups.setup_plan import plan_setups
 
 
 @functools.lru_cache(maxsize=1)
@@ -147,7 +147,7 @@ def test_no_solution_has_no_certificate_and_says_so():
 
 def test_causes_classify_each_left_out_patch():
     from mavac.params import SetupSpaceParams
-    from mavac.setups.diagnose import unreachable_causes
+    from mavac.setups.unreachable import unreachable_causes
 
     tri = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0, 0.01, 0.0]])
     space = SetupSpaceParams(origin_x=0.0, origin_y=0.0, table_z=-0.5)  # table 0.5 m under the shoulder

@@ -1,7 +1,7 @@
 """Why stain patches are left out of a setup plan: under the support, too high, too far, facing
 away, occluded.
 
-:func:`mavac.setups.plan.plan_setups` lists the patches no candidate setup reaches. A user who
+:func:`mavac.setups.setup_plan.plan_setups` lists the patches no candidate setup reaches. A user who
 sees "47 % of the stain unreachable" needs the likely cause, so each such patch is tested again
 over a uniform grid of the whole setup space, step by step:
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.sim.camera import intrinsics_from_fov, mavac_T_opencv, render_rgbd
+from mavac.sim.render import intrinsics_from_fov, mavac_T_opencv, render_rgbd
 from mavac.sim.world import SimWorld
 from mavac.vision.rgbd import back_project
 

@@ -19,16 +19,16 @@ import numpy as np
 from ..geometry.stain_marking import oversized_patches
 from ..io import write_json
 from ..params import SetupPlanParams
-from ..validate import check_callable
 from ..planning.setcover import (
     execution_time_area_passes,
     setup_costs_from_times,
     solve_setup_cover,
 )
 from ..robots.models import puma560
-from .diagnose import unreachable_causes, unreachable_message
+from ..validate import check_callable
 from .reach import CountingReach, FeasibleReach, PartReach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
+from .unreachable import unreachable_causes, unreachable_message
 from .viewer import setup_plan_html
 
 
@@ -75,7 +75,7 @@ class SetupPlan:
     seconds : float
         Wall time of the whole call.
     uncoverable_causes : (u,) str
-        Likely cause for each uncoverable patch (:data:`mavac.setups.diagnose.CAUSES`).
+        Likely cause for each uncoverable patch (:data:`mavac.setups.unreachable.CAUSES`).
     warnings : list of str
         What the user should know: unreachable share of the stain and why, oversized patches.
     """
@@ -167,7 +167,7 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
     params : SetupPlanParams, optional
     feasible : callable, optional
         ``feasible(setups (k, 3)) -> (k,) bool``: setups that exist at all (e.g. the holding
-        arm of a two-arm cell can present the part there, :class:`mavac.setups.held.HeldSetups`);
+        arm of a two-arm cell can present the part there, :class:`mavac.scrubbing.holding.HeldSetups`);
         the others reach nothing and are dropped, and a warning says how many.
 
     Returns

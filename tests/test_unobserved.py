@@ -1,4 +1,4 @@
-"""Causes of unobserved surface (MAVAC plan) in mavac.inspection.diagnose."""
+"""Causes of unobserved surface (MAVAC plan) in mavac.inspection.unobserved."""
 
 import dataclasses
 
@@ -8,8 +8,8 @@ import trimesh
 
 from mavac.experiments.mavac_offline import fast_params
 from mavac.geometry.machines import machine_from_mesh
-from mavac.inspection.diagnose import LOW_COVERAGE, coverage_message, unobserved_causes
-from mavac.inspection.plan import plan_from_context, plan_inspection, prepare_offline
+from mavac.inspection.inspection_plan import plan_from_context, plan_inspection, prepare_offline
+from mavac.inspection.unobserved import LOW_COVERAGE, coverage_message, unobserved_causes
 
 
 def test_a_tall_tower_is_reported_too_high():

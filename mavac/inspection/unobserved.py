@@ -1,6 +1,6 @@
 """Why surface elements stay unobserved in an inspection plan: too high, too far, or occluded.
 
-After :func:`mavac.inspection.plan.plan_from_context`, each element of S that no pose of T sees
+After :func:`mavac.inspection.inspection_plan.plan_from_context`, each element of S that no pose of T sees
 gets the likely cause, from what the offline pipeline already knows:
 
 * ``too_high``: from no collision-free candidate spot does the camera pose that inspects it (on
@@ -35,7 +35,7 @@ def unobserved_causes(ctx, plan, rmap=None) -> np.ndarray:
     Parameters
     ----------
     ctx : OfflineContext
-        From :func:`mavac.inspection.plan.prepare_offline`.
+        From :func:`mavac.inspection.inspection_plan.prepare_offline`.
     plan : InspectionPlan
         Planned on ``ctx``.
     rmap : ReachabilityMap, optional

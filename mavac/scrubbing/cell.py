@@ -5,7 +5,7 @@ Two KUKA iiwa arms (:func:`mavac.robots.models.iiwa7`) face each other across th
 (:class:`mavac.params.BimanualCellParams`): the cleaning arm at the world origin carries the
 abrasive pad, the holding arm at ``world_T_holder`` grips the part at a fixed grasp
 ``flange_T_part`` (part z = flange z, ``grasp_offset`` along it). Everything here is plain
-kinematics (pinocchio, coal); the pybullet cell is :mod:`mavac.sim.bimanual`.
+kinematics (pinocchio, coal); the pybullet cell is :mod:`mavac.scrubbing.scene`.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ def holder_ik(holder, world_T_parts, params: BimanualCellParams = BimanualCellPa
 def part_clear_of_arms(cleaner, holder, part_mesh: trimesh.Trimesh, world_T_parts, q_holder,
                        params: BimanualCellParams = BimanualCellParams()) -> np.ndarray:
     """Whether the part, held at each pose, stays clear of the holding arm (at ``q_holder``) and
-    of the cleaning arm parked at :data:`CLEANER_PARK` (coal, 5 mm margin, ours).
+    of the cleaning arm parked at :data:`CLEANER_PARK` (coal, ``params.part_clearance`` margin).
 
     A part too large to fit between the arms at a pose fails here.
 
@@ -110,8 +110,8 @@ def part_clear_of_arms(cleaner, holder, part_mesh: trimesh.Trimesh, world_T_part
     # The part touches the holding flange's adapter by construction; the links up to the
     # wrist (joints 1-5) must stay clear of it.
     # One BVH of the part (in the part frame); each pose moves the arms' bases around it.
-    hold = CollisionChecker(_links_up_to(holder, 5), part_mesh, margin=0.005)
-    clean = CollisionChecker(cleaner, part_mesh, margin=0.005)
+    hold = CollisionChecker(_links_up_to(holder, 5), part_mesh, margin=params.part_clearance)
+    clean = CollisionChecker(cleaner, part_mesh, margin=params.part_clearance)
     for j, (Tj, qj) in enumerate(zip(T, q_holder)):
         part_T_world = np.linalg.inv(Tj)
         hold.set_base(part_T_world @ params.world_T_holder)

@@ -28,7 +28,8 @@ more A slides more but tips, f_x has a resonance that depends on kappa. A face o
 thickness ``s`` (in layers; a part's stain intensity) and hardness ``h`` keeps
 ``max(s - W eps / h, 0)``, with log-normal process noise ``eps`` (per face and per
 experiment). The camera sees the thickness through Beer-Lambert opacity
-(:func:`stain_opacity`). Cleaning performance is then MEASURED like in the paper:
+(:func:`stain_opacity`). :class:`ContactWear` applies the same law to the contact the
+pybullet cell measures (:mod:`mavac.scrubbing.scrub`). Cleaning performance is then MEASURED like in the paper:
 before/after images (:func:`mavac.vision.stain.render_stain_image`, pixel noise) -> K-means
 masks -> C_p.
 """
@@ -41,8 +42,9 @@ import numpy as np
 import trimesh
 
 from ..geometry.mesh import check_mesh
+from ..geometry.transforms import transform_points
 from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
-from ..validate import check_array, check_instance, check_int, check_points
+from ..validate import check_array, check_instance, check_int, check_points, check_positive
 from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
                                 render_stain_image, stain_masks_kmeans, view_of_faces)
 
@@ -306,3 +308,38 @@ class ScrubExperiment:
             self._table = (grid, np.array([self._cp_of_removal(w) for w in grid]))
         grid, cp = self._table
         return np.interp(removal_from_vector(X, model=self.model, base=self.base), grid, cp)
+
+
+class ContactWear:
+    """Per-face Preston removal from MEASURED contact, accumulated step by step: the faces
+    within ``pad_radius`` m of the contact centroid lose ``preston x pressure x sliding``.
+
+    Parameters
+    ----------
+    part_mesh : trimesh.Trimesh
+        Part frame, metres.
+    pad_radius : float, m
+    preston : float
+        Stain layers per (Pa x m of sliding).
+
+    Attributes
+    ----------
+    removal : (F,) float
+        Removal so far per face (stain layers at unit hardness).
+    """
+
+    def __init__(self, part_mesh: trimesh.Trimesh, pad_radius: float, preston: float):
+        from scipy.spatial import cKDTree
+
+        self.centres = np.asarray(check_mesh("part_mesh", part_mesh).triangles_center)
+        self.tree = cKDTree(self.centres)
+        self.radius = float(check_positive("pad_radius", pad_radius))
+        self.preston = float(check_positive("preston", preston))
+        self.removal = np.zeros(len(self.centres))
+
+    def add(self, part_T_world, contact_points, pressure: float, sliding: float) -> None:
+        """One step: contact points (k, 3) world, ``pressure`` Pa, ``sliding`` m."""
+        centre = transform_points(part_T_world, contact_points.mean(axis=0, keepdims=True))[0]
+        faces = self.tree.query_ball_point(centre, self.radius)
+        if faces:
+            self.removal[faces] += self.preston * pressure * sliding

@@ -1,11 +1,13 @@
-"""Setups a holding arm can present (Kabir et al. Sec. IX-C, the two-arm cell).
+"""Setups a holding arm can present, and the setup plan of the two-arm cell (Kabir et al.
+Sec. IX-C).
 
 In the paper's cell one iiwa holds the part and changes setups, the other cleans. A setup
 ``(x, y, alpha)`` then exists only where the holding arm reaches the part pose with its
 flange (full-pose IK through the fixed grasp) and the part, held there, leaves room for both
 arms. :class:`HeldSetups` is that test as the ``feasible`` argument of
-:func:`mavac.setups.plan.plan_setups`: the planner drops every other candidate and says how
-many and why.
+:func:`mavac.setups.setup_plan.plan_setups`: the planner drops every other candidate and says how
+many and why. :func:`plan_cell_setups` plans with it; :func:`setup_configurations` gives the
+holding arm's configuration of each planned setup.
 """
 
 from __future__ import annotations
@@ -13,10 +15,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry.mesh import check_mesh
-from ..params import BimanualCellParams
-from ..sim.cell import holder_ik, part_clear_of_arms
+from ..geometry.parts import Part
+from ..params import BimanualCellParams, ReachParams, SetupPlanParams
+from ..setups.reach import base_T_part
+from ..setups.setup_plan import SetupPlan, plan_setups
 from ..validate import check_instance, check_points
-from .reach import base_T_part
+from .cell import holder_ik, part_clear_of_arms
 
 
 class HeldSetups:
@@ -25,7 +29,7 @@ class HeldSetups:
     Parameters
     ----------
     cleaner, holder : RobotModel
-        From :func:`mavac.sim.cell.cell_robots`.
+        From :func:`mavac.scrubbing.cell.cell_robots`.
     part_mesh : trimesh.Trimesh
         Part frame, metres.
     params : BimanualCellParams
@@ -65,3 +69,29 @@ class HeldSetups:
         """What was refused and why, for the plan's warnings."""
         return (f"{self.unreachable} the holding arm cannot reach, {self.collides} where the part "
                 "would hit an arm (too large to fit between them)")
+
+
+def plan_params_for_cell(cell: BimanualCellParams, *, ik_restarts: int = 2, **changes) -> SetupPlanParams:
+    """Setup-planner parameters for the cell: its setup space and sampling, the cleaning arm's
+    pad as the reach test's tool, ``ik_restarts`` DLS restarts (ours: 2 gave the same bowl
+    plan as 12 in a quarter of the time)."""
+    return SetupPlanParams(space=cell.space, sampling=cell.sampling,
+                           reach=ReachParams(tool_length=cell.tool_length, ik_restarts=ik_restarts), **changes)
+
+
+def plan_cell_setups(part: Part, cleaner, holder, cell: BimanualCellParams, plan_params: SetupPlanParams) -> SetupPlan:
+    """Kabir's setup planner for the cleaning arm, dropping setups the holding arm cannot present."""
+    return plan_setups(part, robot=cleaner, params=plan_params, feasible=HeldSetups(cleaner, holder, part.mesh, cell))
+
+
+def setup_configurations(holder_feasible: HeldSetups, setups, q_prev=None) -> np.ndarray:
+    """Holding-arm configurations of a plan's setups, each seeded from the previous one."""
+    out = []
+    for s in np.asarray(setups, float).reshape(-1, 3):
+        T = base_T_part(s[None], holder_feasible.params.space)
+        res = holder_ik(holder_feasible.holder, T, holder_feasible.params, q0=q_prev)
+        if not res.success[0]:
+            res = holder_ik(holder_feasible.holder, T, holder_feasible.params)
+        q_prev = res.q[0]
+        out.append(q_prev)
+    return np.array(out)

@@ -1,1 +1,0 @@
-"""Deprecated package: MAVAC's offline planning moved to :mod:`mavac.inspection`."""

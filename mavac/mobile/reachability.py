@@ -1,5 +1,0 @@
-"""Deprecated path: use :mod:`mavac.inspection.reachability`."""
-
-from mavac._deprecated import alias
-
-alias(__name__, "mavac.inspection.reachability")

@@ -1,5 +1,0 @@
-"""Deprecated path: use :mod:`mavac.scrubbing.gpr`."""
-
-from mavac._deprecated import alias
-
-alias(__name__, "mavac.scrubbing.gpr")
