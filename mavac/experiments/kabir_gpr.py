@@ -22,6 +22,7 @@ from ..params import OPERATION_PARAMS, GPRParams
 from ..scrubbing import execution
 from ..scrubbing.gpr import dense_optimum, experiments_to_reach, learn_parameters, objective, random_search
 from ..scrubbing.wear import ScrubExperiment
+from ..seeding import rng_for
 
 PARTS = ("bowl", "hull")
 _REF = "Sec. IX-C GPR"
@@ -40,8 +41,8 @@ def gpr_params_for(part: str, **changes) -> GPRParams:
 @functools.lru_cache(maxsize=8)
 def scrub_experiment(part: str, seed: int = 0) -> ScrubExperiment:
     """:func:`mavac.scrubbing.execution.scrub_experiment` of the package's part ``part`` (stain
-    drawn from ``seed``, hardness from ``(seed, 1)``). Cached per process."""
-    return execution.scrub_experiment(load_part(part, seed=seed), np.random.default_rng([seed, 1]))
+    drawn from ``seed``, hardness from the stream "scrub hardness" of ``seed``). Cached per process."""
+    return execution.scrub_experiment(load_part(part, seed=seed), rng_for(seed, "scrub hardness"))
 
 
 @functools.lru_cache(maxsize=8)
@@ -74,7 +75,7 @@ def run_trial(args) -> dict:
     """
     part, method, seed, budget = args
     ex = scrub_experiment(part)
-    rng = np.random.default_rng([seed, 7])
+    rng = rng_for(seed, "gpr learner")
     if method == "gpr":
         params = gpr_params_for(part, max_experiments=budget, seed=seed)
         result = learn_parameters(ex, params, rng=rng)

@@ -24,6 +24,7 @@ from ..parallel import map_trials
 from ..params import (VISIBILITY_METHODS, GuardParams, InspectionParams, NoSParams, ReachabilityMapParams,
                       SpotParams, Visibility)
 from ..robots.kinematics import JOINT_LIMIT_K, joint_limit_penalty, maneuverability, manipulability_ratio
+from ..seeding import rng_for
 from ..vision.camera import fov_pyramid_lines
 from ..vision.visibility import VisibilityScene, classification_rates, hpr_error_rates
 from ..viz.plots import plot_mesh, set_equal_3d
@@ -154,7 +155,7 @@ def _spot_hpr_trial(args) -> list[dict]:
     machine, factors, params = args
     m = load_machine(machine)
     surf = surface_elements(m.mesh, params.surface_spacing, params.seed)
-    poses = candidate_spots(m.footprint, params.spot, np.random.default_rng([params.seed, 0]))
+    poses = candidate_spots(m.footprint, params.spot, rng_for(params.seed, "spot candidates"))
     views = spot_viewpoints(poses, params.spot.view_heights)
     ray = VisibilityScene(m.mesh).visible(surf.points, surf.normals, views)
     rows = []
@@ -361,11 +362,11 @@ def k1_summary(effect: pd.DataFrame) -> pd.DataFrame:
 
 def _guard_poses(machine: str, n_poses: int, P_s: float, params: InspectionParams):
     """Prepared context and at most ``n_poses`` feasible guard camera poses (m, 4, 4) of the
-    spots selected with ``P_s``, subsampled with ``params.seed``."""
+    spots selected with ``P_s``, subsampled from the stream "guard pose subsample" of ``params.seed``."""
     ctx = prepare_offline(load_machine(machine), params=_with(params, P_s=P_s))
     sel = select_spots(ctx.accessible, ctx.candidates, P_s)
     poses = np.concatenate([ctx.guard_candidates(int(r)).world_T_camera for r in sel.greedy.selected])
-    rng = np.random.default_rng(params.seed)
+    rng = rng_for(params.seed, "guard pose subsample")
     if len(poses) > n_poses:
         poses = poses[np.sort(rng.choice(len(poses), n_poses, replace=False))]
     return ctx, poses

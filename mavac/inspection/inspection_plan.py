@@ -40,6 +40,7 @@ from ..planning.tour import short_open_path
 from ..robots.collision import CollisionChecker
 from ..robots.kinematics import maneuverability
 from ..robots.models import ur10_mobile
+from ..seeding import rng_for
 from ..vision.visibility import VisibilityScene
 from ..viz.scenes import inspection_plan_html
 from . import guards as G
@@ -344,7 +345,7 @@ class OfflineContext:
         """
         if row not in self._guards:
             acc = self.accessible[row, self.targets] & self.clear[self.targets]
-            rng = np.random.default_rng([self.params.seed, 1, row])
+            rng = rng_for(self.params.seed, "guard candidates", row)
             T = se2_matrices(self.candidates[row:row + 1])[0]
             self._guards[row] = G.guard_candidates(self.robot, self.checker, T, self.points, self.normals,
                                                    self.targets[acc], self.params.camera, rng,
@@ -368,7 +369,7 @@ class OfflineContext:
 
 def _accessible_candidates(machine, robot, rmap, points, normals, params: InspectionParams, vis_scene):
     """Collision-free candidate spots (m, 3), their reachable sets and accessible sets (m, n) bool."""
-    cands = SP.candidate_spots(machine.footprint, params.spot, np.random.default_rng([params.seed, 0]))
+    cands = SP.candidate_spots(machine.footprint, params.spot, rng_for(params.seed, "spot candidates"))
     cands = cands[SP.collision_free_spots(robot, machine.mesh, cands, margin=params.guard.collision_margin)]
     reach = SP.reachable_sets(rmap, cands, points, normals, params.guard_standoff)
     return cands, reach, reach & _spot_visibility(points, normals, cands, params.spot, params.visibility, vis_scene)

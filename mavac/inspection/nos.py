@@ -26,6 +26,7 @@ from ..geometry.transforms import compose, se2_matrices
 from ..params import InspectionParams, NoSParams
 from ..planning.rrt import plan_rrt_connect
 from ..robots.kinematics import fk
+from ..seeding import rng_for
 from ..validate import check_int, check_points, check_positive
 from .guards import camera_configurations, guard_visibility
 
@@ -403,7 +404,7 @@ def nos_guards(ctx, spots, observed, params: InspectionParams) -> tuple[list, li
         if c.best_gateway is None:
             continue
         k = spot_along_direction(spots[:, :2], c.origin, c.best_gateway.direction)
-        rng = np.random.default_rng([params.seed, 2, c.label])
+        rng = rng_for(params.seed, "nos guard", c.label)
         record, q = attempt_nos_guard(c, k, world_T_bases[k], robot, ctx.checker, params.nos,
                                       params.guard_standoff, rng)
         if q is not None:

@@ -30,6 +30,7 @@ from tqdm.auto import tqdm
 from ..io import write_csv
 from ..params import InspectionParams
 from ..robots.kinematics import maneuverability
+from ..seeding import rng_for
 from ..viz.scenes import reach_study_html
 from .guards import camera_configurations
 from .inspection_plan import prepare_offline
@@ -178,7 +179,7 @@ def reach_study(mesh_or_machine, robot=None, params: InspectionParams | None = N
         todo = np.flatnonzero(rmap.is_reachable_from(T, cam, -N))
         if len(todo) == 0:
             continue
-        rng = np.random.default_rng([ctx.params.seed, 3, k])
+        rng = rng_for(ctx.params.seed, "reach study camera", k)
         ok, q, _ = camera_configurations(ctx.robot, ctx.checker, T, cam[todo], -N[todo], rng)
         if not ok.any():
             continue

@@ -31,6 +31,7 @@ from ..cache import verified_cache
 from ..geometry.transforms import points_in_frame, vectors_in_frame
 from ..params import ReachabilityMapParams
 from ..robots.kinematics import fk
+from ..seeding import rng_for
 from ..tolerances import COUNT_SLACK, PARALLEL_TOL
 from ..validate import check_points, check_size
 from ..vision.camera import OPTICAL_AXIS
@@ -187,7 +188,7 @@ def robot_fingerprint(robot, frame: str) -> str:
 
 def _build(robot, key: str, frame: str, params: ReachabilityMapParams, axis_column: int) -> dict:
     """Sample FK, rotate about joint 1 when exact, bin into voxels x directions (cached)."""
-    rng = np.random.default_rng(params.seed)
+    rng = rng_for(params.seed, "reachability map")
     lo = np.maximum(robot.q_lower, -math.pi)
     hi = np.minimum(robot.q_upper, math.pi)
     q = rng.uniform(lo, hi, size=(params.n_samples, robot.nq))

@@ -52,6 +52,7 @@ from tqdm.auto import tqdm
 
 from ..parallel import single_thread
 from ..params import OPERATION_PARAMS, GPRParams
+from ..seeding import rng_for
 from ..validate import (ParameterTypeError, check_array, check_callable, check_instance, check_int,
                         check_nonnegative, check_points, check_real)
 
@@ -275,7 +276,7 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
         The black box (a physical experiment in the paper; the simulated scrub here).
     params : GPRParams
     rng : numpy.random.Generator, optional
-        Drives candidates and the experiment's noise; default ``default_rng(params.seed)``.
+        Drives candidates and the experiment's noise; default the stream "gpr" of ``params.seed`` (:func:`mavac.seeding.rng_for`).
     progress : bool
         tqdm bar over experiments.
 
@@ -284,7 +285,7 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
     GPRResult
     """
     _check_learner_inputs(experiment, params, rng)
-    rng = np.random.default_rng(params.seed) if rng is None else rng
+    rng = rng_for(params.seed, "gpr") if rng is None else rng
     rows: list = []
     grid = coarse_grid(params)
     bar = tqdm(total=params.max_experiments, disable=not progress, leave=False, desc="GPR")
@@ -342,7 +343,7 @@ def random_search(experiment, params: GPRParams = GPRParams(), *, budget: int = 
     """
     budget = check_int("budget", budget, 1)
     _check_learner_inputs(experiment, params, rng)
-    rng = np.random.default_rng(params.seed) if rng is None else rng
+    rng = rng_for(params.seed, "gpr") if rng is None else rng
     rows: list = []
     for _ in range(budget):
         x = _from_unit(rng.uniform(size=len(OPERATION_PARAMS)), params)
