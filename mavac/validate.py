@@ -4,8 +4,9 @@ Every refusal names the parameter and what is valid: a ``TypeError`` (a
 :class:`ParameterTypeError`, also a ``ValueError``) when the value has the wrong type (a
 string, a boolean or ``None`` where a number is meant, floats where indices are meant), a
 ``ValueError`` when the type is right but the value is not (NaN, infinity, out of range, wrong
-shape, ragged). Parameter dataclasses check every field's type and finiteness in
-one place, :func:`check_fields`, from their annotations.
+shape, ragged). Parameter dataclasses check every field in one place, :func:`check_fields`:
+its type and finiteness from the annotation, its legal values (range, choices, tuple length)
+from the declaration :func:`ranged`.
 """
 
 from __future__ import annotations
@@ -197,13 +198,92 @@ def check_size(name: str, value, count: float, limit: float, what: str) -> None:
                          f"{limit:.3g} this step allows; change {name}")
 
 
-# ---- parameter dataclasses: one type and finiteness check for every field ----
+# ---- parameter dataclasses: one check of every field, from its annotation and declaration ----
+
+
+@dataclasses.dataclass(frozen=True)
+class _Legal:
+    """The legal values of one field, declared with :func:`ranged`: a closed or open interval
+    (for a tuple field, of each element), or a set of choices; a tuple's length."""
+
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple | None = None
+    length: int | None = None
+    nonempty: bool = False
+
+    def check(self, name: str, value) -> None:
+        """Raise ``ValueError`` naming the field unless ``value`` is legal."""
+        if self.choices is not None:
+            if value not in self.choices:
+                raise ValueError(f"{name} must be one of {self.choices}, got {value!r}")
+            return
+        if isinstance(value, tuple):
+            if self.length is not None and len(value) != self.length:
+                raise ValueError(f"{name} must hold {self.length} values, got {value!r}")
+            if self.nonempty and not value:
+                raise ValueError(f"{name} must hold at least one value")
+        for v in value if isinstance(value, tuple) else (value,):
+            check_range(name, v, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open)
+
+
+_LEGAL = "mavac.legal"  # the metadata key of a field's _Legal
+
+
+def ranged(default, *, ge=None, gt=None, le=None, lt=None, choices: tuple | None = None,
+           length: int | None = None, nonempty: bool = False) -> dataclasses.Field:
+    """A parameter dataclass field with its default and its legal values, which
+    :func:`check_fields` enforces after the type.
+
+    Parameters
+    ----------
+    default : object
+        The field's default (immutable: a number, a string, a tuple or ``None``).
+    ge, gt : float, optional
+        Lower bound, closed (``value >= ge``) or open (``value > gt``); at most one of them.
+    le, lt : float, optional
+        Upper bound, closed (``value <= le``) or open (``value < lt``); at most one of them.
+        For a tuple field the bounds hold for each element; ``None`` is legal for an
+        ``X | None`` field whatever the bounds.
+    choices : tuple, optional
+        The legal values (strings or integers), instead of bounds.
+    length : int, optional
+        For a tuple field, the exact number of elements.
+    nonempty : bool
+        For a tuple field, whether at least one element is needed.
+
+    Returns
+    -------
+    dataclasses.Field
+        ``dataclasses.field(default=default)`` carrying the declaration in its metadata.
+
+    Examples
+    --------
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Camera(CheckedFields):
+    ...     L_d: float = ranged(0.5, gt=0.0)
+    >>> Camera(L_d=0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: L_d must be in (0.0, inf], got 0.0
+    """
+    if (ge is not None and gt is not None) or (le is not None and lt is not None):
+        raise TypeError("ranged: give at most one of ge and gt, and one of le and lt")
+    if choices is not None and not all(b is None for b in (ge, gt, le, lt)):
+        raise TypeError("ranged: give choices or bounds, not both")
+    legal = _Legal(lo=next((b for b in (ge, gt) if b is not None), -math.inf),
+                   hi=next((b for b in (le, lt) if b is not None), math.inf),
+                   lo_open=gt is not None, hi_open=lt is not None,
+                   choices=None if choices is None else tuple(choices), length=length, nonempty=nonempty)
+    return dataclasses.field(default=default, metadata={_LEGAL: legal})
 
 
 @functools.lru_cache(maxsize=None)
 def _field_types(cls) -> tuple:
     hints = typing.get_type_hints(cls)
-    return tuple((f.name, hints[f.name]) for f in dataclasses.fields(cls))
+    return tuple((f.name, hints[f.name], f.metadata.get(_LEGAL)) for f in dataclasses.fields(cls))
 
 
 def _check_field(owner: str, name: str, value, kind):
@@ -241,17 +321,34 @@ def _check_field(owner: str, name: str, value, kind):
 
 
 def check_fields(params) -> None:
-    """Check the type and finiteness of every field of a parameter dataclass from its
-    annotation (``float``, ``int``, ``bool``, ``str``, ``tuple`` of numbers, ``X | None``, a
-    nested dataclass). Each dataclass of :mod:`mavac.params` calls it first in
-    ``__post_init__``, then checks its ranges.
+    """Check every field of a parameter dataclass: first the type and finiteness of each, from
+    its annotation (``float``, ``int``, ``bool``, ``str``, ``tuple`` of numbers, ``X | None``, a
+    nested dataclass), then the legal values declared with :func:`ranged`. Every dataclass of
+    :mod:`mavac.params` runs it first (:class:`CheckedFields`); checks that relate two fields
+    follow in its own ``__post_init__``.
 
     Raises ``TypeError`` for a wrong type (a string or a boolean where a number is meant, a
-    float where an integer is meant) and ``ValueError`` for NaN or infinity, naming the field.
+    float where an integer is meant) and ``ValueError`` for NaN, infinity or a value outside
+    the declared ones, naming the field. All types are checked before any value, so a wrong
+    type is a ``TypeError`` whatever else is wrong.
     """
     owner = type(params).__name__
-    for name, kind in _field_types(type(params)):
+    fields = _field_types(type(params))
+    for name, kind, _ in fields:
         value = getattr(params, name)
         checked = _check_field(owner, name, value, kind)
         if checked is not value:
             object.__setattr__(params, name, checked)  # frozen: store the normalised value
+    for name, _, legal in fields:
+        value = getattr(params, name)
+        if legal is not None and value is not None:
+            legal.check(name, value)
+
+
+class CheckedFields:
+    """Base of the parameter dataclasses: ``__post_init__`` runs :func:`check_fields`. A
+    subclass with checks across fields overrides it and calls ``super().__post_init__()``
+    first."""
+
+    def __post_init__(self):
+        check_fields(self)
