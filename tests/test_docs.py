@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 from mavac import docs_results
+from mavac.experiments import mavac_online as mon
 from mavac.config import ROOT
 
 DOCS = ROOT / "docs"
@@ -39,25 +40,25 @@ def test_missing_csv_or_column_says_not_run(tmp_path, monkeypatch):
     monkeypatch.setattr(docs_results, "RESULTS_DIR", tmp_path)
     secs = {s.anchor: s for s in docs_results.sections()}
     assert "`data/results/mavac_table1.csv` is not there" in secs["mavac-table-1"].body
-    assert "no column `cleaning_pct`" in secs["mavac-table-2"].body
+    assert "no column `reading`" in secs["mavac-table-2"].body
     assert secs["kabir-table-ii"].ours == "not run"
     assert "not run" in docs_results.readme_block(list(secs.values()))
 
 
-def test_table2_reads_the_layout_with_readings_scenes_and_summary_rows(tmp_path, monkeypatch):
-    rows = [dict(reading=r, scene=sc, trial=t, heaps=h, cleaning_pct=pct, precision=1.0, recall=0.9,
-                 sim_time_s=300.0)
-            for r, base in (("paper", 70.0), ("authors", 80.0))
-            for sc, h in (("test_bench", 87), ("sanding_milling", 238))
-            for t, pct in ((1, base - 1), (2, base + 1))]
-    rows += [dict(reading="paper", scene="test_bench", trial="mean", heaps=87, cleaning_pct=999.0)]
-    pd.DataFrame(rows).to_csv(tmp_path / "mavac_table2.csv", index=False)
+def test_table2_reads_both_readings_scenes_and_regions(tmp_path, monkeypatch):
+    trials = pd.DataFrame([dict(reading=r, scene=sc, trial=t, seed=t, heaps=10, cleaned=c, uncleaned=10 - c,
+                                cleaning_pct=10.0 * c, precision=1.0, recall=0.9, sim_time_s=600.0,
+                                open_heaps=8, open_cleaned=min(c, 8), enclosed_heaps=2, enclosed_cleaned=max(c - 8, 0))
+                           for r, base in (("paper", 8), ("authors", 4))
+                           for sc in ("test_bench", "sanding_milling") for t, c in ((1, base - 1), (2, base + 1))])
+    trials.to_csv(tmp_path / "mavac_table2_trials.csv", index=False)
+    mon.table2(trials).to_csv(tmp_path / "mavac_table2.csv", index=False)
     monkeypatch.setattr(docs_results, "RESULTS_DIR", tmp_path)
     part = docs_results.mavac_table2()
-    assert "| reading | machine |" in part.body and "999" not in part.body
-    assert "| authors | test bench | 2 | 80.0 ± 1.4 % | 87.8 % |" in part.body
-    assert "| paper | sanding + milling | 2 | 70.0 ± 1.4 % | 80.2 % |" in part.body
-    assert "paper test bench 70.0 %" in part.ours and "authors sanding + milling 80.0 %" in part.ours
+    assert "| paper-style mean, all trials of both tests | 84.0 % | 80.0 % (70.0-90.0) | 40.0 % (30.0-50.0) |" in part.body
+    assert "| test bench | 87.8 % |" in part.body and "| sanding + milling (one test) | 80.2 % |" in part.body
+    assert "| enclosed heaps, both tests | — | 25.0 % of 2 heaps/trial |" in part.body
+    assert part.paper_says.startswith("84 %") and "authors' code 40.0 % (30.0-50.0)" in part.ours
 
 
 def _modules_on_disk() -> set[str]:
