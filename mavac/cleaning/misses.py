@@ -8,7 +8,8 @@ Per heap, the trial records how far it got; an uncleaned heap's cause is the fur
    were skipped), and of no image taken;
 3. ``hidden``: inside a frustum but never drawn (occluded by the machine or the robot);
 4. ``filtered``: drawn in an image but no node of it survived detection and the filters (blob
-   too small, depth invalid or beyond the detection limit, out of reach, duplicate);
+   too small, no valid depth, out of reach, beyond the tool-tip distance, duplicate, or
+   DBSCAN noise when an area needs two nodes);
 5. ``no approach found``: its area had no collision-free, reachable approach point (eq. 5);
 6. ``planner failed``: approach configurations existed, RRT-Connect found no path to any;
 7. ``vacuum missed``: the tool was driven into its area but never came within the suction
