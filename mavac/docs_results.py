@@ -305,8 +305,10 @@ def mavac_table2() -> Part:
              "above it; the paper does not split its count. Times: ours is simulated motion time only, the "
              "paper's the real cleaning time. See [stand-ins](stand-ins.md). "
              + _source("mavac_table2.csv", "mavac_table2_trials.csv"))
-    ours = "; ".join(f"{READINGS_LABEL.get(r, r)} {cells}" for r, cells in
-                     zip(readings, _table2_line(summary, readings, "paper-style mean", "both", "all")))
+    means_ours = {sc: _table2_line(summary, readings, "scene mean", sc, "all") for sc in ("test_bench", "sanding_milling")}
+    ours = "; ".join(f"{READINGS_LABEL.get(r, r)} {cells.split(' (')[0]} (test bench {means_ours['test_bench'][i].split(' (')[0]}, "
+                     f"sanding + milling {means_ours['sanding_milling'][i].split(' (')[0]})"
+                     for i, (r, cells) in enumerate(zip(readings, _table2_line(summary, readings, "paper-style mean", "both", "all"))))
     return Part(body, f"{overall:.0f} % (test bench {means.get('test bench', float('nan')):.1f} %, sanding + "
                       f"milling {means.get('sanding + milling', float('nan')):.1f} %)", ours)
 

@@ -64,3 +64,9 @@ def test_miss_causes_are_split_by_region():
     row = misses[(misses.reading == "paper") & (misses.scene == "test_bench") & (misses.region == "enclosed")].iloc[0]
     assert row["no approach found"] == 3  # trial 1 misses 2 enclosed heaps, trial 2 one
     assert isinstance(mon.times_table(_runs()), pd.DataFrame)
+
+
+def test_miss_shares_sum_to_one_hundred_per_row():
+    shares = mon.miss_shares(mon.miss_causes_table(_runs()))
+    assert (shares["uncleaned"] > 0).all()
+    assert np.allclose(shares[list(mon.CAUSES)].sum(axis=1), 100.0)

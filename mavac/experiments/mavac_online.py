@@ -190,6 +190,16 @@ def miss_causes_table(runs: list[dict]) -> pd.DataFrame:
     return table.groupby(["reading", "scene", "region"], sort=False)[list(CAUSES)].sum().reset_index()
 
 
+def miss_shares(misses: pd.DataFrame) -> pd.DataFrame:
+    """Each cause's share (%) of the uncleaned heaps per reading, scene and region: the measured
+    explanation of the gap to the paper (rows without misses are dropped)."""
+    counts = misses[list(CAUSES)]
+    total = counts.sum(axis=1)
+    shares = (100.0 * counts.div(total.where(total > 0), axis=0)).round(1)
+    out = pd.concat([misses[["reading", "scene", "region"]], total.rename("uncleaned"), shares], axis=1)
+    return out[out["uncleaned"] > 0].reset_index(drop=True)
+
+
 def times_table(runs: list[dict]) -> pd.DataFrame:
     """Simulated time per activity (s), contact forces and filter counts per trial; the
     planning wall time is in ``planning_wall_s`` (not for committed CSVs: it depends on load)."""
