@@ -62,10 +62,11 @@ notebooks: system-deps $(STAMP)
 	MAVAC_FAST=1 $(PY) -m pytest -q --nbval-lax --nbval-current-env -p no:cacheprovider $(NB)
 
 # Paper scale: writes figures/ and data/results/. Executed copies go to build/executed.
+# Trials run two at a time (MAVAC_JOBS, the machine's 2 cores); results do not depend on it.
 reproduce: system-deps $(STAMP)
 	mkdir -p build/executed
 	for nb in $(NB); do \
-	  MAVAC_FAST=0 $(VENV)/bin/jupyter nbconvert --to notebook --execute \
+	  MAVAC_FAST=0 MAVAC_JOBS=$${MAVAC_JOBS:-2} $(VENV)/bin/jupyter nbconvert --to notebook --execute \
 	    --ExecutePreprocessor.timeout=-1 --output-dir build/executed "$$nb" || exit 1; \
 	done
 

@@ -656,7 +656,19 @@ def readme_block(secs: list[Section] | None = None) -> str:
             for s in secs if s.paper_says != DASH or s.ours == "not run"]
     note = ("Kabir's objects in the order sine / Schwefel / concave bowl / hyperboloid (Table V: sine / "
             "concave bowl / hyperboloid). SIMULATED: pybullet stand-ins for the papers' robots and cells.")
-    return "\n".join([START, "", _table(["paper", "table or figure", "the paper", "ours"], rows), "", note, "", END])
+    return "\n".join([START, "", _table(["paper", "table or figure", "the paper", "ours"], rows), "", note,
+                      *_table2_gap(), "", END])
+
+
+def _table2_gap() -> list[str]:
+    """The README's one-line explanation of MAVAC Table 2's gap, from the miss table (paper's text)."""
+    try:
+        misses = _read("mavac_online_misses.csv", ("reading", "scene", "region"))
+    except NotRun:
+        return []
+    causes = [c for c in misses.columns if c not in ("reading", "scene", "region")]
+    return ["", "MAVAC Table 2, where the uncleaned heaps went (paper's text, all trials; "
+                f"[causes per test](docs/results.md#mavac-misses)): {_largest_causes(misses, causes, 'paper')}."]
 
 
 def replace_block(readme: str, block: str) -> str:
