@@ -277,22 +277,18 @@ def _table2_line(summary: pd.DataFrame, readings: list, statistic: str, scene: s
     return cells
 
 
-def _paper_table2() -> tuple[float, dict]:
-    paper = _paper("mavac", "Table 2")
-    means = {_label(m).replace(" and ", " + "): g["cleaning_pct"].mean() for m, g in paper.groupby("machine")}
-    return _paper_scalar_or_none("Results", "cleaning_pct_mean"), means
-
-
 def mavac_table2() -> Part:
     """MAVAC Table 2 (SIMULATED): the paper-style mean, each test and each region, for both
     readings (paper's text, authors' code), beside the paper's."""
     summary = _read("mavac_table2.csv", ("reading", "statistic", "scene", "region", "cleaning_pct"))
     trials = _read("mavac_table2_trials.csv", ("reading", "scene", "heaps", "cleaning_pct"))
     readings = list(dict.fromkeys(summary["reading"]))
-    overall, means = _paper_table2()
+    from .experiments.mavac_online import paper_scene_means
+
+    overall, means = _paper_scalar_or_none("Results", "cleaning_pct_mean"), paper_scene_means()
     lines = [("paper-style mean, all trials of both tests", "paper-style mean", "both", "all", overall),
-             ("test bench", "scene mean", "test_bench", "all", means.get("test bench")),
-             ("sanding + milling (one test)", "scene mean", "sanding_milling", "all", means.get("sanding + milling")),
+             ("test bench", "scene mean", "test_bench", "all", means.get("test_bench")),
+             ("sanding + milling (one test)", "scene mean", "sanding_milling", "all", means.get("sanding_milling")),
              ("open heaps, both tests", "pooled heaps", "both", "open", None),
              ("enclosed heaps, both tests", "pooled heaps", "both", "enclosed", None)]
     rows = [[label, DASH if p is None else f"{p:.1f} %", *_table2_line(summary, readings, st, sc, rg)]
@@ -309,8 +305,8 @@ def mavac_table2() -> Part:
     ours = "; ".join(f"{READINGS_LABEL.get(r, r)} {cells.split(' (')[0]} (test bench {means_ours['test_bench'][i].split(' (')[0]}, "
                      f"sanding + milling {means_ours['sanding_milling'][i].split(' (')[0]})"
                      for i, (r, cells) in enumerate(zip(readings, _table2_line(summary, readings, "paper-style mean", "both", "all"))))
-    return Part(body, f"{overall:.0f} % (test bench {means.get('test bench', float('nan')):.1f} %, sanding + "
-                      f"milling {means.get('sanding + milling', float('nan')):.1f} %)", ours)
+    return Part(body, f"{overall:.0f} % (test bench {means.get('test_bench', float('nan')):.1f} %, sanding + "
+                      f"milling {means.get('sanding_milling', float('nan')):.1f} %)", ours)
 
 
 def _table2_details(trials: pd.DataFrame) -> str:

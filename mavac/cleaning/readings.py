@@ -54,7 +54,7 @@ says.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import fields, is_dataclass, replace
 
 from ..params import ApproachParams, CameraParams, DetectionParams, DustParams, OnlineParams, VacuumParams
 
@@ -138,8 +138,6 @@ def inspection_params(reading: str = "paper"):
 
 def _flat_fields(params, prefix: str = "") -> dict:
     """``{"approach.delta": 0.1, ...}``: every leaf field of a nested parameter dataclass."""
-    from dataclasses import fields, is_dataclass
-
     out = {}
     for f in fields(params):
         value = getattr(params, f.name)

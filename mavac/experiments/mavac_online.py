@@ -151,7 +151,8 @@ def table2(trials: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _paper_scene_means() -> dict:
+def paper_scene_means() -> dict:
+    """The paper's Table 2 cleaning percentage per scene, mean of its trials (``{scene: %}``)."""
     paper = paper_values("mavac", "Table 2", "cleaning_pct")
     scene = paper["condition"].str.extract(r"machine=([^;]+)")[0].map(PAPER_SCENES)
     return paper.groupby(scene)["value"].mean().round(1).to_dict()
@@ -160,7 +161,7 @@ def _paper_scene_means() -> dict:
 def table2_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
     """Paper beside ours, one column per reading (simulated): the paper-style mean, each
     scene, and the open and enclosed regions (the paper does not report regions)."""
-    paper = _paper_scene_means()
+    paper = paper_scene_means()
     lines = [("paper-style mean (all trials of both tests)", "paper-style mean", "both", "all",
               paper_scalar("mavac", "Results", "cleaning_pct_mean", fraction=False))]
     lines += [(scene.replace("_", " "), "scene mean", scene, "all", paper.get(scene)) for scene in SCENES]
