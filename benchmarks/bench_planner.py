@@ -1,132 +1,90 @@
-"""Setup planner benchmark: MILP certificate (HiGHS) vs the paper's Algorithm 2 (Kabir Sec. V).
+"""Setup planner benchmark: the proven optimum against the paper's Algorithm 2 (Kabir Sec. V).
 
-Instance: the concave-bowl candidate setups from ``<cache_dir>/kabir_cover_concave_bowl.npz``
-(arrays ``cover`` (m, n) bool, ``costs`` (m,) s, optional ``patch_area`` (n,) m^2) when that
-file exists; otherwise a seeded synthetic instance resembling the paper's concave bowl of
-Table V (13 non-dominated setups over ~5000 stain patches, setup time 60 s as in Table VI).
-Both solvers run on the same instance in the same process; Algorithm 2 (bound eq. 2, both
-heuristics on) is capped at T_max (no node limit: this is a timing benchmark), and every run
-prints its ``timed_out`` / ``node_limited`` flags. The last line is ``RATIO certified_vs_alg2 <x>`` with
-``x = Algorithm 2 seconds / MILP seconds``.
+Instances: Kabir Table II's, one per object (the non-dominated setups of the uniform grid over
+the package's own setup space, eq. 1 costs with t_s = 60 s), as notebook 06 writes them to
+``data/instances/kabir_table2_<object>.npz``; and OR-Library scp41-48 (``data/orlib``). Never
+the cache: the time does not depend on what ran before.
+
+Per instance it prints the sizes before and after :func:`mavac.planning.reduction.reduce_instance`,
+then the CPU seconds and the result of
+
+* ``certified``: :func:`mavac.planning.certified.certified_cover` (reduction, size bound,
+  enumeration, integer program);
+* ``highs``: HiGHS alone on the reduced instance (:func:`milp_setup_cover`);
+* ``alg2``: Algorithm 2 (eq. 2, guiding and pruning on) on the reduced instance, stopped at the
+  same node budget as the enumeration of ``certified`` (Table II instances only).
+
+Every solver is bounded by nodes, never seconds. The last line is ``RATIO certified_vs_alg2 x``
+with x = Algorithm 2's CPU seconds / certified's, summed over the Table II instances.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import time
+from pathlib import Path
 
-import numpy as np
+from mavac.config import fast_or_full
+from mavac.params import CertifyParams, SetupPlannerParams
+from mavac.planning.certified import certified_cover
+from mavac.planning.instances import read_instance, read_scp
+from mavac.planning.reduction import reduce_instance
+from mavac.planning.setcover import dfbnb_setup_cover, milp_setup_cover
 
-from mavac.config import cache_dir, fast_or_full
-from mavac.params import SetupPlannerParams
-from mavac.setups.dominance import nondominated
-from mavac.planning.setcover import (
-    dfbnb_setup_cover,
-    execution_time_area_passes,
-    milp_setup_cover,
-    setup_costs_from_times,
-)
-
-CACHE_NAME = "kabir_cover_concave_bowl.npz"
+ROOT = Path(__file__).resolve().parent.parent
+OBJECTS = ("sine", "schwefel", "concave_bowl", "hyperboloid")
+ORLIB = tuple(f"scp4{k}" for k in range(1, 9))
 
 
-def synthetic_bowl_instance(seed: int = 4, n: int = 5000, m: int = 13, setup_time: float = 60.0):
-    """Seeded stand-in for the concave bowl's candidate setups.
-
-    Stain patches lie on the bowl wall at polar coordinates ``(phi, rho)``; a setup (a rotation
-    of the bowl about z plus a shift) lets the arm reach an angular sector around ``alpha_j``
-    that narrows towards the rim, above a radius ``rho >= lo_j``. Execution time is
-    area x passes / rate (:func:`execution_time_area_passes`), 1-3 passes per patch.
-
-    Returns
-    -------
-    cover : (m', n) bool
-        Non-dominated setups only.
-    costs : (m',) float, s
-    patch_area : (n,) float, m^2
-    """
-    rng = np.random.default_rng(seed)
-    phi = rng.uniform(0.0, 2.0 * np.pi, n)
-    rho = np.sqrt(rng.uniform(0.04, 1.0, n))
-    alpha = (np.arange(m) + rng.uniform(-0.4, 0.4, m)) * 2.0 * np.pi / m
-    half_width = rng.uniform(0.75, 1.25, m)
-    lo = rng.uniform(0.0, 0.3, m)
-    dphi = np.abs((phi[None] - alpha[:, None] + np.pi) % (2.0 * np.pi) - np.pi)
-    cover = (dphi < half_width[:, None] * (1.2 - 0.5 * rho[None])) & (rho[None] >= lo[:, None])
-    area = rng.uniform(0.5e-4, 1.5e-4, n)  # triangles below 1.5 cm^2 (Kabir Sec. IX-A)
-    passes = rng.integers(1, 4, n)  # at most three passes (Sec. IX-A)
-    t_e = execution_time_area_passes(cover, area, passes, rate=0.002)
-    keep = nondominated(cover)
-    return cover[keep], setup_costs_from_times(t_e, setup_time)[keep], area
+def cpu(fn, *args, **kwargs):
+    """``(result, CPU seconds)`` of one call."""
+    t0 = time.process_time()
+    out = fn(*args, **kwargs)
+    return out, time.process_time() - t0
 
 
-def load_instance():
-    path = cache_dir() / CACHE_NAME
-    if path.exists():
-        data = np.load(path)
-        cover = np.asarray(data["cover"], bool)
-        area = np.asarray(data["patch_area"], float) if "patch_area" in data else None
-        keep = nondominated(cover)
-        return f"cached {path}", cover[keep], np.asarray(data["costs"], float)[keep], area
-    cover, costs, area = synthetic_bowl_instance()
-    return "synthetic concave-bowl-like (seed 4)", cover, costs, area
+def table2_instance(name: str):
+    path = ROOT / "data" / "instances" / f"kabir_table2_{name}.npz"
+    if not path.is_file():
+        raise SystemExit(f"{path} is missing: run notebook 06 at paper scale (make reproduce) to write it")
+    data = read_instance(path)
+    return data["cover"], data["costs"], data["patch_area"]
 
 
-def table_vi_sweep(t_max: float):
-    """Table VI's setup times on the synthetic instance: nodes of Algorithm 2 (eq. 2) and of
-    Algorithm 4 (eq. 7) against the MILP optimum."""
-    print("Table VI-style sweep (synthetic): t_s | MILP size, s | Alg.2 eq.2 nodes, size, s, gap"
-          " | Alg.4 eq.7 nodes, size, s, gap")
-    for t_s in (0.0, 60.0, 3000.0):
-        cover, costs, area = synthetic_bowl_instance(setup_time=t_s)
-        ref = milp_setup_cover(cover, costs)
-        row = [f"{t_s:6.0f}", f"{len(ref.setups)}, {ref.seconds:.3f}"]
-        for algorithm, bound in ((2, "lb"), (4, "b")):
-            params = dataclasses.replace(SetupPlannerParams(), algorithm=algorithm, bound=bound,
-                                         t_max=t_max, max_nodes=None)
-            res = dfbnb_setup_cover(cover, costs, patch_area=area, params=params)
-            flag = f" (timed_out={res.timed_out}, node_limited={res.node_limited})"
-            row.append(f"{res.node_expansions}, {len(res.setups)}, {res.seconds:.2f}{flag}, "
-                       f"{(res.cost - ref.cost) / ref.cost:.1e}")
-        print("  " + " | ".join(row))
+def row(name, cover, costs, certify: CertifyParams, alg2_nodes: int | None):
+    red, t_red = cpu(reduce_instance, cover, costs)
+    cert, t_cert = cpu(certified_cover, cover, costs, params=certify)
+    highs, t_highs = cpu(milp_setup_cover, cover, costs, node_limit=certify.milp_nodes)
+    print(f"{name}: {red.summary()} in {t_red:.2f} s | certified {cert.status} by {cert.proof}: "
+          f"{cert.cost:.3f} ({len(cert.setups)} setups, bound {cert.dual_bound:.3f}, {cert.enumeration_nodes} "
+          f"enumeration + {cert.milp_nodes} HiGHS nodes) {t_cert:.2f} s | HiGHS alone {highs.status}: "
+          f"{highs.cost:.3f} {t_highs:.2f} s")
+    if alg2_nodes is None:
+        return t_cert, None
+    params = dataclasses.replace(SetupPlannerParams(), algorithm=2, bound="lb", guiding=True, pruning=True,
+                                 t_max=None, max_nodes=alg2_nodes)
+    alg2, t_alg2 = cpu(dfbnb_setup_cover, red.cover, red.costs, params=params)
+    cost = red.forced_cost + alg2.cost
+    gap = 100.0 * (cost - cert.cost) / cert.cost if cert.cost > 0 else 0.0
+    print(f"  Algorithm 2, {alg2_nodes} nodes: {'finished' if alg2.finished else 'node_limited'}, "
+          f"{cost:.3f} ({gap:+.1f} % against certified) {t_alg2:.2f} s")
+    return t_cert, t_alg2
 
 
 def main():
-    source, cover, costs, area = load_instance()
-    m, n = cover.shape
-    t_max = fast_or_full(10.0, 120.0)
-    print(f"instance: {source}: m = {m} non-dominated setups, n = {n} patches, "
-          f"costs {costs.min():.1f}-{costs.max():.1f} s")
-
-    # Warm up scipy/HiGHS so the timing below is the solve, not the import.
-    milp_setup_cover(np.eye(2, dtype=bool), np.ones(2))
-    runs = [milp_setup_cover(cover, costs) for _ in range(3)]
-    milp = runs[0]
-    milp_seconds = float(np.median([r.seconds for r in runs]))
-    print(f"MILP (HiGHS, gap 0): status {milp.status}, cost {milp.cost:.3f} s, "
-          f"{len(milp.setups)} setups {milp.setups.tolist()}, {milp_seconds:.4f} s (median of 3)")
-
-    params = dataclasses.replace(SetupPlannerParams(), algorithm=2, bound="lb", guiding=True,
-                                 pruning=True, t_max=t_max, max_nodes=None)
-    alg2 = dfbnb_setup_cover(cover, costs, patch_area=area, params=params)
-    finished = alg2.finished
-    gap = (alg2.cost - milp.cost) / milp.cost if milp.cost > 0 else 0.0
-    print(f"Algorithm 2 (eq. 2, guiding + pruning), T_max = {t_max:.0f} s: "
-          f"{'finished' if finished else 'aborted at T_max'} (timed_out={alg2.timed_out}, "
-          f"node_limited={alg2.node_limited}), cost {alg2.cost:.3f} s, "
-          f"{len(alg2.setups)} setups, {alg2.node_expansions} nodes, {alg2.seconds:.3f} s, "
-          f"gap to certificate {gap:.2e}")
-
-    t0 = time.perf_counter()
-    alg4 = dfbnb_setup_cover(cover, costs, patch_area=area, params=dataclasses.replace(params, algorithm=4, bound="b"))
-    gap4 = (alg4.cost - milp.cost) / milp.cost if milp.cost > 0 else 0.0
-    print(f"Algorithm 4 (eq. 7, IESS {alg4.iess}, N_repeat {alg4.n_repeat}): "
-          f"{'finished' if alg4.finished else 'aborted at T_max'} (timed_out={alg4.timed_out}), cost {alg4.cost:.3f} s, "
-          f"{alg4.node_expansions} nodes, {time.perf_counter() - t0:.3f} s, gap {gap4:.2e}")
-
-    if source.startswith("synthetic"):
-        table_vi_sweep(t_max)
-    print(f"RATIO certified_vs_alg2 {alg2.seconds / milp_seconds:.2f}")
+    nodes = fast_or_full(20_000, 200_000)
+    # HiGHS re-solves an LP per node: ~0.1 s on the bowl, ~1 min for the sine's root alone
+    certify = CertifyParams(enumeration_nodes=nodes, milp_nodes=fast_or_full(5, 50))
+    print(f"node budget: enumeration and Algorithm 2 {nodes}, HiGHS {certify.milp_nodes}; CPU seconds")
+    milp_setup_cover(*read_scp(ROOT / "data" / "orlib" / "scp41.txt"))  # warm up scipy / HiGHS
+    certified, alg2 = 0.0, 0.0
+    for name in OBJECTS:
+        cover, costs, _ = table2_instance(name)
+        t_cert, t_alg2 = row(f"Table II {name}", cover, costs, certify, nodes)
+        certified, alg2 = certified + t_cert, alg2 + t_alg2
+    for name in ORLIB:
+        row(f"OR-Library {name}", *read_scp(ROOT / "data" / "orlib" / f"{name}.txt"), certify, None)
+    print(f"RATIO certified_vs_alg2 {alg2 / certified:.2f}")
 
 
 if __name__ == "__main__":

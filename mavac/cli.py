@@ -132,7 +132,8 @@ def cmd_setups(args) -> int:
     stem = Path(args.part).stem
     out = _default(args.out, stem, "_setups.html")
     js = _default(args.json, stem, "_setups.json", beside=out)
-    params = SetupPlanParams(seed=args.seed, planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
+    params = SetupPlanParams(seed=args.seed, method=args.method,
+                             planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
     t0 = time.perf_counter()
     bar = _stage_bar(["loading part", "marking the stain", "reach test and planning", "writing"], args.quiet)
     with bar:
@@ -213,6 +214,8 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .params import SETUP_COVER_METHODS
+
     fmt = _HelpFormatter
     parser = argparse.ArgumentParser(
         prog="mavac", formatter_class=fmt,
@@ -236,8 +239,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("setups", formatter_class=fmt, help="setup plan of a stained part (Kabir et al.)",
                        description="Kabir et al.'s setup planning on your part: the fewest, fastest placements of "
-                                   "the part in front of a Puma 560 that let it reach every stain patch (depth-first "
-                                   "branch and bound, certified by an integer program). The part should be "
+                                   "the part in front of a Puma 560 that let it reach every stain patch, proven optimal "
+                                   "(or the paper's depth-first branch and bound with --method dfbnb). The part should be "
                                    "2 cm-2 m across.")
     p.add_argument("part", help="part mesh: .stl, .obj, .ply or .dae")
     p.add_argument("--stain", required=True,
@@ -252,7 +255,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--subdivide", action="store_true",
                    help="split stained triangles larger than the tool tip (1.5 cm^2) before planning")
     p.add_argument("--setup-time", type=float, default=60.0, help="time to re-place the part, s (Kabir Table VI)")
-    p.add_argument("--t-max", type=float, default=10.0, help="time bound of the branch-and-bound search, s")
+    p.add_argument("--method", choices=SETUP_COVER_METHODS, default="auto",
+                   help="auto = the proven optimum (reduction, size bound, enumeration, integer program; node budgets "
+                        "only); milp = the integer program alone; dfbnb = the paper's depth-first branch and bound; "
+                        "both = DFBnB's plan with the proven optimum beside it")
+    p.add_argument("--t-max", type=float, default=10.0,
+                   help="time bound of the paper's branch-and-bound search (methods dfbnb and both), s")
     p.add_argument("--out", help="HTML page (default: <part>_setups.html in $MAVAC_OUT or the current directory)")
     p.add_argument("--json", help="JSON plan (default: <part>_setups.json beside the HTML page)")
     _common(p, role="part")

@@ -65,6 +65,15 @@ def figures_dir() -> Path:
     return path
 
 
+def instances_dir() -> Path:
+    """Where planner instances go: ``data/instances`` at paper scale, ``build/instances`` in fast
+    mode, under :func:`output_root`."""
+    root = output_root()
+    path = root / "build" / "instances" if is_fast() else root / "data" / "instances"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
 def cache_dir() -> Path:
     """On-disk cache for expensive stages: ``MAVAC_CACHE``, else ``build/cache`` in a checkout,
     else the user's cache folder (``$XDG_CACHE_HOME/mavac`` or ``~/.cache/mavac``)."""

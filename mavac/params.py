@@ -394,11 +394,42 @@ class SetupPlannerParams(CheckedFields):
     setup_time: float = ranged(60.0, ge=0.0)
     # Seed of Algorithm 5's random draws (ours).
     seed: int = ranged(0, ge=0)
+    # Ours: DFBnB searches the instance reduced by mavac.planning.reduction (same optimum, a
+    # smaller tree). False is the paper's search over every candidate, whose nodes Tables V-VII
+    # count.
+    reduce: bool = True
 
     def __post_init__(self):
         super().__post_init__()
         if self.algorithm == 2 and self.t_decay > 0:
             raise ValueError("t_decay only enters step 5 of Algorithm 4; set algorithm=4")
+
+
+#: Methods of the setup planner (:func:`mavac.planning.setcover.solve_setup_cover`); "auto" is
+#: the proven optimum.
+SETUP_COVER_METHODS = ("auto", "milp", "dfbnb", "both")
+
+
+@dataclass(frozen=True)
+class CertifyParams(CheckedFields):
+    """Budgets of the certified set-cover solver (ours; :mod:`mavac.planning.certified`).
+
+    Every budget counts nodes, never seconds, so a result does not depend on machine load.
+    """
+
+    # Ours: the bitset enumeration searches covers of up to this many setups; it proves the
+    # optimum when the incumbent's size bound is no larger, else the integer program takes
+    # over. 4 proves the Table II bowl (1,670 nodes) and Schwefel (50,401 nodes) instances.
+    max_enumerated_size: int = ranged(4, ge=1)
+    # Ours: nodes of the bitset enumeration before it hands over to the integer program.
+    enumeration_nodes: int = ranged(500_000, ge=1)
+    # Ours: branch-and-bound nodes given to HiGHS (each re-solves an LP: milliseconds on a few
+    # hundred candidates, seconds on thousands); None for no limit.
+    milp_nodes: int | None = ranged(10_000, ge=1)
+    # Ours: a cover is optimal when no cover is cheaper by more than this fraction of its cost
+    # (the incumbent enters HiGHS as the cutoff ``c.x <= (1 - rel_tol) T``; HiGHS' own feasibility
+    # tolerance is 1e-7 absolute).
+    rel_tol: float = ranged(1e-6, gt=0.0, lt=0.01)
 
 
 # ---- MAVAC offline planning: reachability map, spots, guards, NoS (read by mavac/inspection) ----
@@ -808,9 +839,19 @@ class SetupPlanParams(CheckedFields):
     # with T_max = 10 s so the call always returns (the paper sets no T_max); setup time 60 s
     # (Kabir, Table VI middle value).
     planner: SetupPlannerParams = field(default_factory=lambda: SetupPlannerParams(t_max=10.0))
-    # "milp" (exact, HiGHS), "dfbnb" (the paper's search) or "both" (DFBnB plan + MILP
-    # certificate and gap). Ours: "both".
-    method: str = ranged("both", choices=("milp", "dfbnb", "both"))
+    # "auto" (the proven optimum: reduction, size bound, enumeration, integer program), "milp"
+    # (HiGHS alone), "dfbnb" (the paper's search) or "both" (DFBnB's plan, the proven optimum as
+    # certificate and gap). Ours: "auto", because a user wants the cheapest plan, proven.
+    method: str = ranged("auto", choices=SETUP_COVER_METHODS)
+    # Node budgets of the proof (ours; see CertifyParams).
+    certify: CertifyParams = field(default_factory=CertifyParams)
+
+    @classmethod
+    def paper(cls, **changes) -> SetupPlanParams:
+        """The paper's planner: DFBnB (Algorithm 2) over every candidate, its plan and node count,
+        with the proven optimum beside it (method "both", no reduction)."""
+        defaults = cls()
+        return replace(defaults, method="both", planner=replace(defaults.planner, reduce=False), **changes)
 
 
 # ---- Kabir bimanual cell: two iiwa arms in pybullet (read by mavac/scrubbing/cell.py, scene.py, scrub.py,

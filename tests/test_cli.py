@@ -87,12 +87,22 @@ def test_setups_plans_a_stained_part(files, tmp_path, capsys):
                           "--quiet", "--out", str(tmp_path / "dome.html")], capsys)
     assert code == 0, err
     plan = json.loads((tmp_path / "dome_setups.json").read_text())
-    assert plan["status"] == "optimal" and plan["setups"]
-    assert plan["certificate_cost_s"] == pytest.approx(plan["cost_s"])
+    assert plan["status"] == "optimal" and plan["setups"] and plan["method"] == "auto"
+    assert plan["certificate_cost_s"] == pytest.approx(plan["cost_s"]) == pytest.approx(plan["certificate_bound_s"])
+    assert plan["certificate_proof"] in ("reduction", "enumeration", "milp") and "proven optimal" in out
     covered = sorted(i for s in plan["setups"] for i in s["patches"])
     assert covered + plan["uncoverable"] == sorted(covered + plan["uncoverable"])
     assert "setup 1:" in out and "passes [0, " in out
     assert "mavac-legend" in (tmp_path / "dome.html").read_text()
+
+
+def test_setups_method_dfbnb_is_the_papers_search_without_a_certificate(files, tmp_path, capsys):
+    code, out, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                          "--method", "dfbnb", "--out", str(tmp_path / "dome.html")], capsys)
+    assert code == 0, err
+    plan = json.loads((tmp_path / "dome_setups.json").read_text())
+    assert plan["method"] == "dfbnb" and plan["certificate_cost_s"] is None and plan["node_expansions"] > 0
+    assert "proven" not in out
 
 
 def test_setups_from_painted_colours_subdivides_large_patches(files, tmp_path, capsys):

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mavac.setups.dominance import nondominated, pack_rows
+from mavac.planning.dominance import nondominated, pack_rows
 
 
 def nondominated_brute(cover):

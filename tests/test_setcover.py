@@ -3,6 +3,7 @@
 import dataclasses
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,7 +14,6 @@ from mavac.params import SetupPlannerParams
 from mavac.planning import setcover
 from mavac.planning.iess import n_repeat_recommended
 from mavac.planning.setcover import (
-    MilpResult,
     brute_force_setup_cover,
     cleaning_rate,
     dfbnb_setup_cover,
@@ -351,13 +351,13 @@ def test_defaults_are_bounded():
     assert d.t_max is not None and d.t_max > 0 and d.max_nodes is not None
 
 
-def test_large_instance_warns_and_recommends_the_milp():
+def test_large_instance_warns_and_recommends_the_proven_optimum():
     rng = np.random.default_rng(3)
     cover = rng.random((60, 40)) < 0.3
     params = dataclasses.replace(SetupPlannerParams(), max_nodes=2000)
-    with pytest.warns(UserWarning, match="milp"):
+    with pytest.warns(UserWarning, match="method='auto'"):
         res = solve_setup_cover(cover, rng.uniform(1, 2, 60), params=params, method="both")
-    assert res.node_expansions <= 2000 and any("milp" in w for w in res.warnings)
+    assert res.node_expansions <= 2000 and any("method='auto'" in w for w in res.warnings)
 
 
 def _paper_algorithm2_nodes(cover, costs):
@@ -425,27 +425,58 @@ def test_remaining_cost_model_needs_times():
         SetupPlannerParams(cost_model="order")
 
 
-def test_unproven_milp_is_no_certificate(monkeypatch):
-    """HiGHS stopped at its limit with 62 where the plan costs 60: status and bound, no certificate."""
+def test_unproven_certificate_is_no_certificate(monkeypatch):
+    """The proof stopped at its node budget with 62 where the plan costs 60: status and bound, no
+    certificate."""
     cover, costs = hard_instance()
-    fake = MilpResult(np.array([0, 1, 2]), 62.0, "time_limit", False, 0.01, np.zeros(0, np.int64), 55.0)
-    monkeypatch.setattr(setcover, "milp_setup_cover", lambda *a, **k: fake)
+    fake = SimpleNamespace(setups=np.array([0, 1, 2]), cost=62.0, status="node_limited", optimal=False, seconds=0.01,
+                           reduced=SimpleNamespace(uncoverable=np.zeros(0, np.int64)), dual_bound=55.0, proof="none")
+    monkeypatch.setattr(setcover, "certified_cover", lambda *a, **k: fake)
     res = solve_setup_cover(cover, costs, params=dataclasses.replace(P, max_nodes=3000), method="both")
     assert res.certificate_cost is None and res.certificate_gap is None
-    assert res.certificate_status == "time_limit" and res.certificate_bound == 55.0
+    assert res.certificate_status == "node_limited" and res.certificate_bound == 55.0
 
 
 def test_seconds_and_t_max_cover_the_whole_call(monkeypatch):
     cover, costs = hard_instance()
-    real = setcover.milp_setup_cover
+    real = setcover.certified_cover
 
-    def slow_milp(*args, **kwargs):
+    def slow_certificate(*args, **kwargs):
         time.sleep(0.4)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(setcover, "milp_setup_cover", slow_milp)
+    monkeypatch.setattr(setcover, "certified_cover", slow_certificate)
     t0 = time.perf_counter()
     res = solve_setup_cover(cover, costs, params=dataclasses.replace(P, pruning=False, t_max=0.6), method="both")
     wall = time.perf_counter() - t0
     assert res.seconds >= 0.4 and res.seconds >= wall - 0.1  # the whole call, the MILP's time in it
     assert res.timed_out and wall <= 0.6 + 0.25  # the search got only what the MILP left
+
+
+def test_auto_is_the_proven_optimum_where_dfbnb_stops_above_it():
+    rng = np.random.default_rng(3)
+    cover = rng.random((60, 40)) < 0.3
+    costs = rng.uniform(1, 2, 60)
+    params = dataclasses.replace(SetupPlannerParams(), max_nodes=50, t_max=None)
+    with pytest.warns(UserWarning):
+        both = solve_setup_cover(cover, costs, params=params, method="both")
+    auto = solve_setup_cover(cover, costs, params=params)
+    assert both.status == "node_limited" and both.certificate_gap > 0
+    assert auto.status == "optimal" and auto.cost == pytest.approx(both.certificate_cost) and auto.cost < both.cost
+    assert auto.certificate_gap == 0 and auto.certificate_proof in ("enumeration", "milp")
+    assert np.array_equal(cover[auto.setups].any(axis=0), cover.any(axis=0))
+
+
+@pytest.mark.parametrize("reduce", [True, False], ids=["reduced", "paper's search"])
+@pytest.mark.parametrize("method", ["auto", "milp", "dfbnb", "both"])
+def test_every_method_agrees_with_brute_force_on_small_instances(method, reduce):
+    rng = np.random.default_rng(21)
+    for _ in range(25):
+        m, n = int(rng.integers(2, 10)), int(rng.integers(2, 20))
+        cover = rng.random((m, n)) < 0.35
+        if not cover.any():
+            continue
+        costs = rng.uniform(1.0, 5.0, m)
+        res = solve_setup_cover(cover, costs, method=method, params=dataclasses.replace(P, t_max=None, reduce=reduce))
+        assert res.status == "optimal"
+        assert res.cost == pytest.approx(brute_force_setup_cover(cover, costs)[1])

@@ -168,3 +168,24 @@ def test_patches_larger_than_the_tool_tip_warn():
     with pytest.warns(UserWarning, match="larger than the tool tip"):
         plan = plan_setups(big, robot=robot(), params=FAST)
     assert any("tool tip" in w for w in plan.warnings)
+
+
+def test_summary_says_when_dfbnb_stops_above_the_proven_optimum():
+    part = small_stain(step=8)
+    starved = dataclasses.replace(FAST, method="both",
+                                  planner=SetupPlannerParams(t_max=None, max_nodes=5, guiding=False))
+    plan = plan_setups(part, robot=robot(), params=starved)
+    best = plan_setups(part, robot=robot(), params=FAST)
+    assert best.status == "optimal" and best.certificate_cost == pytest.approx(best.cost)
+    assert "proven optimal" in best.summary()
+    assert plan.status == "node_limited" and plan.certificate_cost == pytest.approx(best.cost)
+    assert best.cost < plan.cost
+    line = plan.summary().splitlines()[1]
+    assert line.startswith(f"  DFBnB stopped (node_limited) at {plan.cost:.1f} s") and f"{best.cost:.1f} s" in line
+    assert "method 'auto' plans the optimum" in line
+
+
+def test_paper_params_run_dfbnb_over_every_candidate_with_the_optimum_beside_it():
+    paper = SetupPlanParams.paper(seed=3)
+    assert paper.method == "both" and paper.planner.reduce is False and paper.seed == 3
+    assert SetupPlanParams().method == "auto" and SetupPlanParams().planner.reduce is True

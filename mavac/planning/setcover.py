@@ -17,7 +17,7 @@ execution time of its trajectory over all its patches) and a plan costs (eq. 1)
 The planner is independent of robots and geometry; setup costs come from
 :func:`setup_costs_from_times` with an execution-time model such as
 :func:`execution_time_area_passes` (or the tool-path model, same ``(m,)`` interface).
-Remove dominated setups first with :func:`mavac.setups.dominance.nondominated`, as the paper
+Remove dominated setups first with :func:`mavac.planning.dominance.nondominated`, as the paper
 does (Section IV); the planner itself solves the problem it is given.
 """
 
@@ -33,9 +33,11 @@ import numpy as np
 from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.sparse import csr_array
 
-from ..params import SetupPlannerParams
+from ..params import SETUP_COVER_METHODS, CertifyParams, SetupPlannerParams
 from ..validate import check_cover
 from .iess import initial_estimate_of_setup_size, n_repeat_recommended, row_bitsets
+from .certified import certified_cover
+from .reduction import reduce_instance
 
 # Above this many random trials the Section IX-B choice of N_repeat is refused unless T_max
 # bounds the run (C(m, m/2) grows like 2^m: m = 30 already needs ~3.6e8 trials).
@@ -459,7 +461,8 @@ class MilpResult:
     cost : float
         ``sum c_j`` over ``setups`` (``inf`` without a feasible point).
     status : str
-        "optimal", "time_limit" (feasible, not proven) or HiGHS' message otherwise.
+        "optimal", "limit_reached" (a time or node limit stopped HiGHS; feasible, not proven) or
+        HiGHS' message otherwise.
     optimal : bool
     seconds : float
     uncoverable : (u,) int
@@ -467,6 +470,9 @@ class MilpResult:
     dual_bound : float
         HiGHS' proven lower bound on the optimum, s (equal to ``cost`` when optimal; ``-inf``
         when HiGHS proved none).
+    proof : str
+        What proved it: "milp", or for :func:`mavac.planning.certified.certified_cover`
+        "reduction", "enumeration", "milp" or "none".
     """
 
     setups: np.ndarray
@@ -476,18 +482,23 @@ class MilpResult:
     seconds: float
     uncoverable: np.ndarray
     dual_bound: float = -math.inf
+    proof: str = "milp"
 
 
-def milp_setup_cover(cover, setup_costs, time_limit: float | None = None, *, fixed_cost: float = 0.0,
-                     allow_zero: bool = False) -> MilpResult:
-    """Exact weighted set cover: ``min c.x  s.t.  cover^T x >= 1,  x in {0, 1}^m`` (HiGHS).
+def milp_setup_cover(cover, setup_costs, time_limit: float | None = None, *, node_limit: int | None = None,
+                     fixed_cost: float = 0.0, allow_zero: bool = False) -> MilpResult:
+    """Exact weighted set cover: ``min c.x  s.t.  cover^T x >= 1,  x in {0, 1}^m`` (HiGHS), on the
+    instance reduced by :func:`mavac.planning.reduction.reduce_instance`.
 
     Parameters
     ----------
     cover : (m, n) bool
     setup_costs : (m,) float, s, > 0 (>= 0 with ``allow_zero``)
     time_limit : float, optional
-        Seconds given to HiGHS; None for no limit.
+        Seconds given to HiGHS; None for no limit (a wall-clock cap: results then depend on
+        machine load; prefer ``node_limit``).
+    node_limit : int, optional
+        Branch-and-bound nodes given to HiGHS; None for no limit.
     fixed_cost : float, s
         Added to the objective (the order-free part of a "remaining" cost).
 
@@ -499,30 +510,30 @@ def milp_setup_cover(cover, setup_costs, time_limit: float | None = None, *, fix
     """
     t0 = time.perf_counter()
     c = check_cover(cover)
-    m, n = c.shape
-    costs = _check_costs(setup_costs, m, allow_zero=allow_zero)
+    costs = _check_costs(setup_costs, c.shape[0], allow_zero=allow_zero)
     if time_limit is not None and not (time_limit > 0):
         raise ValueError(f"time_limit must be > 0 s or None, got {time_limit!r}")
-    comp = _compress(c, np.ones(n))
-    if comp.cover.shape[1] == 0:
-        return MilpResult(np.zeros(0, np.int64), float(fixed_cost), "optimal", True,
-                          time.perf_counter() - t0, comp.uncoverable, float(fixed_cost))
-    a = csr_array(comp.cover.T.astype(float))
+    red = reduce_instance(c, costs, check=False)
+    base = red.forced_cost + fixed_cost
+    if red.cover.shape[1] == 0:
+        return MilpResult(red.lift([]), base, "optimal", True, time.perf_counter() - t0, red.uncoverable, base)
     options = {"mip_rel_gap": 0.0}
     if time_limit is not None and math.isfinite(time_limit):
         options["time_limit"] = float(time_limit)
-    res = milp(c=costs, constraints=LinearConstraint(a, lb=1.0, ub=np.inf),
-               integrality=np.ones(m), bounds=Bounds(0.0, 1.0), options=options)
+    if node_limit is not None:
+        options["node_limit"] = int(node_limit)
+    res = milp(c=red.costs, constraints=LinearConstraint(csr_array(red.cover.T.astype(float)), lb=1.0, ub=np.inf),
+               integrality=np.ones(len(red.costs)), bounds=Bounds(0.0, 1.0), options=options)
     bound = getattr(res, "mip_dual_bound", None)
-    bound = -math.inf if bound is None or not np.isfinite(bound) else float(bound) + fixed_cost
+    bound = -math.inf if bound is None or not np.isfinite(bound) else float(bound) + base
     if res.x is None:
         return MilpResult(np.zeros(0, np.int64), math.inf, str(res.message), False,
-                          time.perf_counter() - t0, comp.uncoverable, bound)
-    chosen = np.flatnonzero(res.x > 0.5)
-    status = {0: "optimal", 1: "time_limit"}.get(res.status, str(res.message))
+                          time.perf_counter() - t0, red.uncoverable, bound)
+    chosen = red.lift(np.flatnonzero(res.x > 0.5))
+    status = {0: "optimal", 1: "limit_reached"}.get(res.status, str(res.message))
     cost = math.fsum(costs[chosen].tolist()) + fixed_cost
-    return MilpResult(chosen.astype(np.int64), cost, status, res.status == 0, time.perf_counter() - t0,
-                      comp.uncoverable, cost if res.status == 0 else bound)
+    return MilpResult(chosen, cost, status, res.status == 0, time.perf_counter() - t0,
+                      red.uncoverable, cost if res.status == 0 else bound)
 
 
 def milp_remaining_cover(cover, setup_time, patch_time, time_limit: float | None = None) -> MilpResult:
@@ -612,15 +623,15 @@ class SetupCoverResult:
     setup_time_total, execution_time_total : float or None
         Split of ``cost`` when the setup time was given.
     method : str
-        "milp", "dfbnb" or "both" (the plan is then DFBnB's).
+        "auto", "milp", "dfbnb" or "both" (the plan is then DFBnB's).
     status : str
-        "optimal" (MILP proven, or DFBnB Algorithm 2 with eq. 2 run to the end), "converged"
-        (Algorithm 4 or eq. 7 run to the end: heuristic, see ``certificate_gap``), "timed_out"
-        (T_max stopped the search; best plan found, if any), "node_limited" (``max_nodes``
-        stopped it), "no_solution" (no setup reaches any patch: ``uncoverable`` lists them all),
-        "empty" (no patches); for "milp" also "time_limit" or HiGHS' message.
+        "optimal" (proven: "auto" or "milp" finished, or DFBnB Algorithm 2 with eq. 2 run to the
+        end), "converged" (Algorithm 4 or eq. 7 run to the end: heuristic, see
+        ``certificate_gap``), "timed_out" (T_max stopped the search; best plan found, if any),
+        "node_limited" (a node budget stopped the search or the proof), "no_solution" (no setup
+        reaches any patch: ``uncoverable`` lists them all), "empty" (no patches).
     node_expansions : int
-        DFBnB nodes (0 for "milp").
+        DFBnB nodes (0 for "auto" and "milp").
     seconds : float
         Wall time of the whole call (both methods for "both").
     timed_out : bool
@@ -629,14 +640,17 @@ class SetupCoverResult:
     iess : int or None
         Algorithm 5's estimate (Algorithm 4).
     certificate_cost : float or None
-        MILP optimum, only when HiGHS proved it (method "both" or "milp").
+        The proven optimum ("auto", "both", "milp"), only when proven.
     certificate_gap : float or None
-        ``(cost - certificate_cost) / certificate_cost`` (method "both", proven optimum only).
+        ``(cost - certificate_cost) / certificate_cost`` ("both" and "auto", proven optimum only).
     certificate_seconds : float or None
     certificate_status : str or None
-        HiGHS' status: "optimal", "time_limit", ...
+        "optimal", "node_limited" or HiGHS' message.
     certificate_bound : float or None
-        HiGHS' proven lower bound on the optimum (its dual bound), s.
+        Proven lower bound on the optimum, s.
+    certificate_proof : str or None
+        What proved it: "reduction", "enumeration" or "milp" (see
+        :func:`mavac.planning.certified.certified_cover`).
     node_limited : bool
     warnings : list of str
         E.g. a large instance given to DFBnB.
@@ -660,6 +674,7 @@ class SetupCoverResult:
     certificate_seconds: float | None = None
     certificate_status: str | None = None
     certificate_bound: float | None = None
+    certificate_proof: str | None = None
     node_limited: bool = False
     warnings: list = field(default_factory=list)
 
@@ -670,7 +685,8 @@ LARGE_INSTANCE = 30
 
 
 def solve_setup_cover(cover, setup_costs, *, patch_area=None, params: SetupPlannerParams | None = None,
-                      method: str = "milp", setup_time=None, patch_time=None) -> SetupCoverResult:
+                      method: str = "auto", setup_time=None, patch_time=None,
+                      certify: CertifyParams | None = None) -> SetupCoverResult:
     """Cheapest set of setups cleaning every coverable patch (Kabir, eq. 1).
 
     Parameters
@@ -682,24 +698,35 @@ def solve_setup_cover(cover, setup_costs, *, patch_area=None, params: SetupPlann
     patch_area : (n,) float, m^2, optional
         Cleaning rates (guiding heuristic, execution order); unit areas when omitted.
     params : SetupPlannerParams, optional
-        DFBnB settings; ``t_max`` bounds the whole call (MILP and DFBnB together) and
-        ``max_nodes`` the search. The defaults are bounded (60 s, 200,000 nodes).
-    method : {"milp", "dfbnb", "both"}
-        "both" returns DFBnB's plan with the MILP optimum as certificate when proven.
+        DFBnB settings; ``t_max`` and ``max_nodes`` bound the search (60 s, 200,000 nodes).
+    method : {"auto", "milp", "dfbnb", "both"}
+        "auto": the proven optimum of :func:`mavac.planning.certified.certified_cover`
+        (reduction, size bound, enumeration, integer program); "milp": HiGHS alone on the
+        reduced instance; "dfbnb": the paper's search; "both": DFBnB's plan with the proven
+        optimum as certificate.
     setup_time : float or (m,) float, s, optional
         The ``t_s`` part of ``setup_costs``: splits the cost in the result; needed with
         ``params.cost_model="remaining"``.
     patch_time : (n,) float, s, optional
         Execution time of each patch; needed with ``params.cost_model="remaining"``.
+    certify : CertifyParams, optional
+        Node budgets of "auto", "both" and "milp".
 
     Returns
     -------
     SetupCoverResult
+
+    Notes
+    -----
+    Every method solves the reduced instance (:func:`mavac.planning.reduction.reduce_instance`),
+    except DFBnB with ``params.reduce`` False (the paper's search) or under
+    ``cost_model="remaining"``, whose step costs depend on every patch's time.
     """
     t0 = time.perf_counter()
     params = SetupPlannerParams() if params is None else params
-    if method not in ("milp", "dfbnb", "both"):
-        raise ValueError(f"method must be 'milp', 'dfbnb' or 'both', got {method!r}")
+    certify = CertifyParams() if certify is None else certify
+    if method not in SETUP_COVER_METHODS:
+        raise ValueError(f"method must be one of {SETUP_COVER_METHODS}, got {method!r}")
     c = check_cover(cover)
     m, n = c.shape
     costs = _check_costs(setup_costs, m)
@@ -709,27 +736,45 @@ def solve_setup_cover(cover, setup_costs, *, patch_area=None, params: SetupPlann
     if n == 0 or not c.any():
         return _nothing_to_plan(m, n, method, time.perf_counter() - t0)
     notes = _size_warnings(m, method)
-    deadline = math.inf if params.t_max is None else t0 + params.t_max
-    milp_res = None
-    if method in ("milp", "both"):
-        milp_res = _certificate(c, costs, remaining, params.t_max)
-    if method == "milp":
-        chosen, cost, nodes, stop, iess = milp_res.setups, milp_res.cost, 0, "", None
-        status = milp_res.status
-        stop = "timed_out" if status == "time_limit" else "finished"
+    cert = None if method == "dfbnb" else _certificate(c, costs, remaining, method, certify)
+    if method in ("auto", "milp"):
+        chosen, cost, nodes, iess = cert.setups, cert.cost, 0, None
+        status = "optimal" if cert.optimal else "node_limited"
+        stop = "finished" if cert.optimal else "node_limited"
     else:
-        left = max(deadline - time.perf_counter(), 1e-9) if math.isfinite(deadline) else None
-        dfb = dfbnb_setup_cover(c, costs, patch_area=area, params=dataclasses.replace(params, t_max=left),
-                                setup_time=setup_time, patch_time=patch_time)
-        chosen, cost, nodes, iess = dfb.setups, dfb.cost, dfb.node_expansions, dfb.iess
-        stop = "timed_out" if dfb.timed_out else "node_limited" if dfb.node_limited else "finished"
+        chosen, cost, nodes, iess, stop = _dfbnb_on_reduced(c, costs, area, params, setup_time, patch_time,
+                                                            t0, remaining)
         exact = params.algorithm == 2 and params.bound == "lb"  # Algorithm 4 and eq. 7 are heuristics
         status = stop if stop != "finished" else "optimal" if exact else "converged"
     result = _plan_result(c, costs, area, ts, remaining, chosen, cost, method, status, nodes, stop, iess)
     result.warnings = notes
-    _attach_certificate(result, milp_res, method)
+    _attach_certificate(result, cert, method)
     result.seconds = time.perf_counter() - t0
     return result
+
+
+def _dfbnb_on_reduced(c, costs, area, params: SetupPlannerParams, setup_time, patch_time, t0: float, remaining):
+    """DFBnB within what is left of ``t_max``; on the reduced instance when ``params.reduce`` and
+    the cost model is "fixed".
+
+    Returns ``(setups, cost, nodes, iess, stop)``.
+    """
+    left = max(t0 + params.t_max - time.perf_counter(), 1e-9) if params.t_max is not None else None
+    p = dataclasses.replace(params, t_max=left)
+    if remaining[0] is not None or not params.reduce:
+        dfb = dfbnb_setup_cover(c, costs, patch_area=area, params=p, setup_time=setup_time, patch_time=patch_time)
+        return dfb.setups, dfb.cost, dfb.node_expansions, dfb.iess, _stop(dfb)
+    red = reduce_instance(c, costs, check=False)
+    if red.cover.shape[1] == 0:
+        return red.lift([]), red.forced_cost, 0, None, "finished"
+    dfb = dfbnb_setup_cover(red.cover, red.costs, patch_area=area[red.patches], params=p)
+    chosen = red.lift(dfb.setups) if len(dfb.setups) else dfb.setups
+    cost = red.forced_cost + dfb.cost
+    return chosen, cost, dfb.node_expansions, dfb.iess, _stop(dfb)
+
+
+def _stop(dfb: DFBnBResult) -> str:
+    return "timed_out" if dfb.timed_out else "node_limited" if dfb.node_limited else "finished"
 
 
 def _split_setup_time(setup_time, costs):
@@ -743,20 +788,26 @@ def _split_setup_time(setup_time, costs):
 
 def _size_warnings(m: int, method: str) -> list:
     """A large instance given to DFBnB: say so, recommend the MILP."""
-    if method == "milp" or m <= LARGE_INSTANCE:
+    if method in ("auto", "milp") or m <= LARGE_INSTANCE:
         return []
     note = (f"cover: {m} candidate setups is a large instance for DFBnB (its tree grows like m!); it stops at "
-            "params.t_max / params.max_nodes with the best plan found. method='milp' solves it exactly, "
-            "usually in well under a second")
+            "params.t_max / params.max_nodes with the best plan found. method='auto' proves the optimum, "
+            "usually in seconds")
     warnings.warn(note, stacklevel=3)
     return [note]
 
 
-def _certificate(c, costs, remaining, t_max) -> MilpResult:
+def _certificate(c, costs, remaining, method: str, certify: CertifyParams) -> MilpResult:
+    """The proven optimum ("auto", "both": :func:`certified_cover`) or HiGHS alone ("milp"),
+    under the fixed or the remaining cost model, as a :class:`MilpResult`."""
     ts, times = remaining
-    if ts is None:
-        return milp_setup_cover(c, costs, time_limit=t_max)
-    return milp_remaining_cover(c, ts, times, time_limit=t_max)
+    fixed = 0.0 if ts is None else math.fsum(times[c.any(axis=0)].tolist())
+    weights = costs if ts is None else ts
+    if method == "milp":
+        return milp_setup_cover(c, weights, node_limit=certify.milp_nodes, fixed_cost=fixed, allow_zero=ts is not None)
+    res = certified_cover(c, weights, params=certify, check=False)
+    return MilpResult(res.setups, res.cost + fixed, res.status, res.optimal, res.seconds, res.reduced.uncoverable,
+                      res.dual_bound + fixed, proof=res.proof)
 
 
 def _nothing_to_plan(m: int, n: int, method: str, seconds: float) -> SetupCoverResult:
@@ -767,7 +818,7 @@ def _nothing_to_plan(m: int, n: int, method: str, seconds: float) -> SetupCoverR
         step_area=np.zeros(0), setup_time_total=0.0 if empty else None,
         execution_time_total=0.0 if empty else None, method=method, status="empty" if empty else "no_solution", node_expansions=0, seconds=seconds, timed_out=False,
         uncoverable=np.arange(n, dtype=np.int64), certificate_cost=0.0 if empty else None,
-        certificate_gap=0.0 if empty and method == "both" else None,
+        certificate_gap=0.0 if empty and method in ("both", "auto") else None,
         certificate_status="optimal" if empty and method != "dfbnb" else None)
 
 
@@ -799,9 +850,10 @@ def _attach_certificate(result: SetupCoverResult, milp_res: MilpResult | None, m
     result.certificate_status = milp_res.status
     result.certificate_bound = milp_res.dual_bound
     result.certificate_seconds = milp_res.seconds
+    result.certificate_proof = milp_res.proof
     if not milp_res.optimal:
         return
     result.certificate_cost = milp_res.cost
-    if method == "both" and math.isfinite(result.cost):
+    if method in ("both", "auto") and math.isfinite(result.cost):
         ref = milp_res.cost
         result.certificate_gap = 0.0 if result.cost == ref else (result.cost - ref) / ref if ref > 0 else math.inf

@@ -72,11 +72,12 @@ class HeldSetups:
 
 
 def plan_params_for_cell(cell: BimanualCellParams, *, ik_restarts: int = 2, **changes) -> SetupPlanParams:
-    """Setup-planner parameters for the cell: its setup space and sampling, the cleaning arm's
-    pad as the reach test's tool, ``ik_restarts`` DLS restarts (ours: 2 gave the same bowl
+    """Setup-planner parameters for the cell: the paper's planner (DFBnB, whose nodes Table VII
+    counts; :meth:`SetupPlanParams.paper`), the cell's setup space and sampling, the cleaning
+    arm's pad as the reach test's tool, ``ik_restarts`` DLS restarts (ours: 2 gave the same bowl
     plan as 12 in a quarter of the time)."""
-    return SetupPlanParams(space=cell.space, sampling=cell.sampling,
-                           reach=ReachParams(tool_length=cell.tool_length, ik_restarts=ik_restarts), **changes)
+    return SetupPlanParams.paper(space=cell.space, sampling=cell.sampling,
+                                 reach=ReachParams(tool_length=cell.tool_length, ik_restarts=ik_restarts), **changes)
 
 
 def plan_cell_setups(part: Part, cleaner, holder, cell: BimanualCellParams, plan_params: SetupPlanParams) -> SetupPlan:

@@ -62,8 +62,8 @@ class SetupPlan:
     nondominated : int
         Candidates left after dominance elimination (the planner's input).
     certificate_cost : float or None
-        MILP optimum of the same instance; None when there is no solution (or the MILP did
-        not run).
+        Proven optimum of the same instance; None when there is no solution, no proof within
+        the node budgets, or only DFBnB ran.
     certificate_gap : float or None
         ``(cost - certificate_cost) / certificate_cost``; 0 means the plan is proven optimal
         over the candidates; None without a certificate.
@@ -78,6 +78,12 @@ class SetupPlan:
         Likely cause for each uncoverable patch (:data:`mavac.setups.unreachable.CAUSES`).
     warnings : list of str
         What the user should know: unreachable share of the stain and why, oversized patches.
+    method : str
+        The planner method (:data:`mavac.planning.setcover.SETUP_COVER_METHODS`).
+    certificate_bound : float or None, s
+        Proven lower bound on the optimum.
+    certificate_proof : str or None
+        What proved the optimum: "reduction", "enumeration" or "milp".
     """
 
     part_name: str
@@ -99,6 +105,9 @@ class SetupPlan:
     seconds: float
     uncoverable_causes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U18"))
     warnings: list = field(default_factory=list)
+    method: str = "auto"
+    certificate_bound: float | None = None
+    certificate_proof: str | None = None
 
     def to_dict(self, timings: bool = False) -> dict:
         """Plain-JSON description: setups in order with their patches, costs, certificate, warnings.
@@ -106,11 +115,14 @@ class SetupPlan:
         Wall time is left out unless asked for, so the same seed gives the same file.
         """
         out = {
-            "part": self.part_name, "status": self.status,
+            "part": self.part_name, "status": self.status, "method": self.method,
             "cost_s": float(self.cost), "setup_time_s": float(self.setup_time_total),
             "execution_time_s": float(self.execution_time_total),
             "certificate_cost_s": None if self.certificate_cost is None else float(self.certificate_cost),
             "certificate_gap": None if self.certificate_gap is None else float(self.certificate_gap),
+            "certificate_bound_s": (float(self.certificate_bound) if self.certificate_bound is not None
+                                    and math.isfinite(self.certificate_bound) else None),
+            "certificate_proof": self.certificate_proof,
             "n_rfc": int(self.n_rfc), "candidates": int(self.candidates), "nondominated": int(self.nondominated),
             "node_expansions": int(self.node_expansions),
             "setups": [{"x": float(s[0]), "y": float(s[1]), "alpha": float(s[2]), "step_cost_s": float(c),
@@ -132,6 +144,22 @@ class SetupPlan:
         """Meshcat page of the plan on ``part`` (:func:`mavac.setups.viewer.setup_plan_html`)."""
         return setup_plan_html(self, part, path, robot=robot, params=params)
 
+    def _certificate_lines(self) -> list:
+        """What is proven about the plan's cost."""
+        if self.status in ("no_solution", "empty") or self.method == "dfbnb":
+            return []
+        if self.certificate_cost is None:
+            bound = "none" if self.certificate_bound is None else f"{self.certificate_bound:.1f} s"
+            return [f"  NOT PROVEN OPTIMAL: the node budgets ran out; proven lower bound {bound}"]
+        if self.method != "both":
+            return [f"  proven optimal (by {self.certificate_proof})"]
+        proven = f"the proven optimum {self.certificate_cost:.1f} s (by {self.certificate_proof})"
+        if self.certificate_gap == 0:
+            return [f"  DFBnB's plan is {proven}"]
+        where = "with no plan, against" if self.certificate_gap is None else \
+            f"at {self.cost:.1f} s, {100 * self.certificate_gap:.2f} % above"
+        return [f"  DFBnB stopped ({self.status}) {where} {proven}; method 'auto' plans the optimum"]
+
     def summary(self) -> str:
         """A few lines a person can read."""
         if self.status == "no_solution":
@@ -142,8 +170,7 @@ class SetupPlan:
                      f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "
                      f"status {self.status}, n_rfc {self.n_rfc}, {self.nondominated} non-dominated of "
                      f"{self.candidates} candidates, {self.node_expansions} DFBnB nodes"]
-        if self.certificate_gap is not None and self.certificate_cost is not None:
-            lines.append(f"  MILP optimum {self.certificate_cost:.1f} s, gap {100 * self.certificate_gap:.2f} %")
+        lines += self._certificate_lines()
         for j, (s, p) in enumerate(zip(self.setups, self.patches)):
             lines.append(f"  setup {j + 1}: x = {s[0]:.3f} m, y = {s[1]:.3f} m, "
                          f"alpha = {math.degrees(s[2]):.1f} deg, {len(p)} patches")
@@ -210,16 +237,8 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
         causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
         return _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
 
-    t_s = params.planner.setup_time
-    costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
-    res = solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method, setup_time=t_s,
-                            patch_time=area * passes / params.cleaning_rate)
-    done = np.zeros(n, dtype=bool)
-    patches, reachable = [], []
-    for j in res.setups:
-        reachable.append(np.flatnonzero(cover[j]))
-        patches.append(np.flatnonzero(cover[j] & ~done))
-        done |= cover[j]
+    res = _solve(cover, area, passes, params)
+    patches, reachable = _patches_per_step(cover, res.setups)
     uncoverable = np.asarray(res.uncoverable, dtype=np.int64)
     causes, notes = _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes)
     _warn_all(notes)
@@ -229,7 +248,27 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
         execution_time_total=res.execution_time_total or 0.0, node_expansions=res.node_expansions,
         n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
         certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
-        uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes)
+        uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes,
+        method=params.method, certificate_bound=res.certificate_bound, certificate_proof=res.certificate_proof)
+
+
+def _solve(cover, area, passes, params: SetupPlanParams):
+    """Eq. 1 costs of the candidates and the planner's answer (:func:`solve_setup_cover`)."""
+    t_s = params.planner.setup_time
+    costs = setup_costs_from_times(execution_time_area_passes(cover, area, passes, params.cleaning_rate), t_s)
+    return solve_setup_cover(cover, costs, patch_area=area, params=params.planner, method=params.method,
+                             setup_time=t_s, patch_time=area * passes / params.cleaning_rate, certify=params.certify)
+
+
+def _patches_per_step(cover, order):
+    """Patches each step cleans first, and every patch each step reaches."""
+    done = np.zeros(cover.shape[1], dtype=bool)
+    patches, reachable = [], []
+    for j in order:
+        reachable.append(np.flatnonzero(cover[j]))
+        patches.append(np.flatnonzero(cover[j] & ~done))
+        done |= cover[j]
+    return patches, reachable
 
 
 def _sample(reach, params: SetupPlanParams):

@@ -96,7 +96,7 @@ def setup_plan_html(plan, part, path, robot=None, params=None):
         entries += [(RED, f"stain no setup reaches ({len(plan.uncoverable)} patches)"), (GREY, "clean surface"),
                     ((0.55, 0.45, 0.35), "table (top at the Puma's shoulder height)")]
         cert = ("no certificate" if plan.certificate_cost is None
-                else f"MILP optimum {plan.certificate_cost:.0f} s")
+                else f"proven optimum {plan.certificate_cost:.0f} s")
         title = (f"{plan.part_name}: no solution" if plan.status == "no_solution" else
                  f"{plan.part_name}: {k} setups, T = {plan.cost:.0f} s ({plan.status}, {cert})")
         legend = ms.legend_html(entries, title=title,

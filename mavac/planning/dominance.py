@@ -40,7 +40,7 @@ def pack_rows(cover) -> np.ndarray:
     return packed.view(np.uint64)
 
 
-def _dominated_by_any(cand: np.ndarray, sup: np.ndarray) -> np.ndarray:
+def dominated_by_any(cand: np.ndarray, sup: np.ndarray) -> np.ndarray:
     """``out[i]`` True when some row of ``sup`` is a superset of ``cand[i]``."""
     out = np.zeros(len(cand), dtype=bool)
     if len(sup) == 0 or len(cand) == 0:
@@ -108,7 +108,7 @@ def nondominated(cover) -> np.ndarray:
     block = 256
     for a in range(0, len(order), block):
         idx = order[a : a + block]
-        idx = idx[~_dominated_by_any(words[idx], kept_words)]
+        idx = idx[~dominated_by_any(words[idx], kept_words)]
         # Within the block: distinct rows, so any other row that is a superset dominates.
         w = words[idx]
         inside = (w[:, None, :] & ~w[None, :, :]) == 0
