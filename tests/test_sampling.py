@@ -4,6 +4,7 @@ import dataclasses
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from mavac.params import SamplingParams, SetupSpaceParams
@@ -223,3 +224,173 @@ def test_alpha_steps_wrap_onto_the_grid_start():
     last = grid[np.isclose(grid[:, 2], math.radians(300))][0]
     nb = S.neighbours(last, (2,), np.array([0.25, 0.25, math.radians(60)]), space)
     assert all(k in keys for k in S.setup_keys(nb))
+
+
+# ---------------------------------------------------------------- end-point map
+
+
+def _reference_descents(grid, cover, space, samp, variant, seeds):
+    """gradient_descent from each of ``seeds`` (grid rows) on a grid lookup: end rows, end
+    setups, round-end rows and the rows each descent reach-tests (its own CountingReach, seed
+    included)."""
+    look = S.lookup_reach(grid, cover)
+    row = {k: j for j, k in enumerate(S.setup_keys(grid))}
+    ends, setups, round_ends, tested = [], [], [], []
+    for j in seeds:
+        reach = S.CountingReach(look)
+        g = S.gradient_descent(reach, grid[j], variant, space, samp, seed_cover=reach(grid[j][None])[0])
+        ends.append(row[S.setup_keys(g.setup[None])[0]])
+        setups.append(g.setup)
+        round_ends.append([row[k] for k in S.setup_keys(g.round_ends)])
+        tested.append(sorted(row[k] for k in reach._memo))
+        assert reach.n_rfc == len(tested[-1])
+    return np.array(ends), np.array(setups), round_ends, tested
+
+
+def _assert_map_is_gradient_descent(emap, grid, cover, space, samp, every=1):
+    seeds = range(0, len(grid), every)
+    ends, setups, round_ends, tested = _reference_descents(grid, cover, space, samp, emap.variant, seeds)
+    np.testing.assert_array_equal(emap.end[seeds], ends)
+    np.testing.assert_array_equal(emap.end_setup[seeds], setups)  # bit for bit, not only the same key
+    assert emap.round_ends[seeds].tolist() == round_ends
+    for j, t in zip(seeds, tested):
+        assert emap.tested[emap.tested_ptr[j]:emap.tested_ptr[j + 1]].tolist() == t
+
+
+def _assert_same_runs(emap, grid, cover, space, samp, seeds, target):
+    """random_sampling_on_map gives random_sampling's result on the grid lookup."""
+    exhausted = 0
+    for seed in seeds:
+        ref = S.random_sampling(S.lookup_reach(grid, cover), space, samp, variant=emap.variant, seed=seed,
+                                target=target)
+        fast = S.random_sampling_on_map(emap, seed=seed, target=target)
+        for name in ("setups", "cover", "nondominated", "seeds"):
+            np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), err_msg=name)
+        assert (fast.n_rfc, fast.samples, fast.covers_target, fast.level) == \
+            (ref.n_rfc, ref.samples, ref.covers_target, ref.level)
+        exhausted += not ref.covers_target
+    return exhausted
+
+
+def _random_cover(m, n, seed, p=0.5):
+    return np.random.default_rng(seed).random((m, n)) < p
+
+
+# a small grid (5 x 5 x 6 = 150), a half-circle alpha range that does not wrap, and a grid with
+# unequal x and y steps whose upper y bound is off the grid (a step from y = 1 m leaves the range)
+SMALL_SPACE = dataclasses.replace(SPACE, res_x=0.25, res_y=0.25, res_alpha=math.radians(60))
+HALF_SPACE = dataclasses.replace(SPACE, alpha_max=math.pi, res_x=0.5, res_y=0.5, res_alpha=math.radians(30))
+ODD_SPACE = dataclasses.replace(SPACE, x_max=0.9, y_max=1.1, res_x=0.3, res_y=0.25, res_alpha=math.radians(60))
+GRID_CASES = {
+    "toy landscape": (SMALL_SPACE, lambda grid: toy_reach(n=70, seed=3)(grid)),
+    "random covers": (SMALL_SPACE, lambda grid: _random_cover(len(grid), 10, 1)),
+    "sparse random covers": (SMALL_SPACE, lambda grid: _random_cover(len(grid), 40, 2, p=0.1)),
+    "half circle": (HALF_SPACE, lambda grid: toy_reach(n=50, seed=4)(grid)),
+    "odd bounds": (ODD_SPACE, lambda grid: _random_cover(len(grid), 16, 5, p=0.3)),
+}
+
+
+def _steps_of(space):
+    return dataclasses.replace(SAMP, gd_step_x=space.res_x, gd_step_y=space.res_y, gd_step_alpha=space.res_alpha)
+
+
+@pytest.mark.parametrize("case", GRID_CASES)
+def test_endpoint_map_is_gradient_descent_seed_by_seed(case):
+    space, make_cover = GRID_CASES[case]
+    samp, grid = _steps_of(space), S.uniform_setups(space)
+    cover = make_cover(grid)
+    maps = S.endpoint_maps(grid, cover, space, samp)
+    assert list(maps) == list(S.VARIANTS)
+    for variant, emap in maps.items():
+        _assert_map_is_gradient_descent(emap, grid, cover, space, samp)
+        _assert_same_runs(emap, grid, cover, space, samp, seeds=range(2), target=cover.any(axis=0))
+
+
+def test_endpoint_map_on_a_real_reach_grid():
+    from mavac.experiments import kabir_setups as K
+    from mavac.params import ReachParams
+
+    res = K.GRID_RESOLUTION["fast"]
+    space = dataclasses.replace(SPACE, res_x=res[0], res_y=res[1], res_alpha=res[2])
+    b = K.placed_baselines(("sine",), space, ReachParams(), wide_resolution=K.WIDE_RESOLUTIONS["fast"],
+                           n_jobs=1)[0]["sine"]
+    samp = _steps_of(b.space)
+    exhausted = 0
+    for emap in S.endpoint_maps(b.setups, b.cover, b.space, samp).values():
+        # every third seed here; the runs below draw nearly every seed's end
+        _assert_map_is_gradient_descent(emap, b.setups, b.cover, b.space, samp, every=3)
+        exhausted += _assert_same_runs(emap, b.setups, b.cover, b.space, samp, seeds=(0,), target=b.coverable)
+    assert exhausted == 3  # each CA variant walks away from a patch and draws the whole grid
+
+
+def test_random_sampling_on_map_exhausts_the_grid_like_random_sampling():
+    # patch 0 is reached only at x = 0, with patch 1; x = 0.25 reaches 1-3, x >= 0.5 reaches
+    # 1-5: the absolute round walks away from patch 0, the conservative one keeps it
+    grid = S.uniform_setups(SMALL_SPACE)
+    cover = np.zeros((len(grid), 6), dtype=bool)
+    for j, x in enumerate(grid[:, 0]):
+        cover[j, [0, 1] if x < 0.1 else [1, 2, 3] if x < 0.4 else [1, 2, 3, 4, 5]] = True
+    samp = _steps_of(SMALL_SPACE)
+    maps = S.endpoint_maps(grid, cover, SMALL_SPACE, samp, ("C_XY", "CA_XY"))
+    assert _assert_same_runs(maps["CA_XY"], grid, cover, SMALL_SPACE, samp, range(3), None) == 3
+    assert S.random_sampling_on_map(maps["CA_XY"], seed=0).samples == len(grid)
+    assert _assert_same_runs(maps["C_XY"], grid, cover, SMALL_SPACE, samp, range(3), None) == 0
+    # an empty target is covered by the first seed
+    assert S.random_sampling_on_map(maps["CA_XY"], seed=0, target=np.zeros(6, bool)).samples == 1
+
+
+def test_endpoint_map_looks_up_candidates_whose_key_is_not_the_tables(monkeypatch):
+    # a path's rounding could move a candidate's key off the table's: every slot is looked up
+    space, make_cover = GRID_CASES["toy landscape"]
+    samp, grid = _steps_of(space), S.uniform_setups(space)
+    cover = make_cover(grid)
+    want = S.endpoint_maps(grid, cover, space, samp)
+    table = S._table
+
+    def shifted(g, setups, axes):
+        t = table(g, setups, axes)
+        return dataclasses.replace(t, keys=t.keys + 1, grows=~t.grows)
+
+    monkeypatch.setattr(S, "_table", shifted)
+    for variant, emap in S.endpoint_maps(grid, cover, space, samp).items():
+        for name in ("end", "end_setup", "round_ends", "tested_ptr", "tested"):
+            np.testing.assert_array_equal(getattr(emap, name), getattr(want[variant], name), err_msg=name)
+
+
+def test_endpoint_map_refuses_steps_off_the_grid_and_bad_variants():
+    grid = S.uniform_setups(SMALL_SPACE)
+    cover = toy_reach(n=20)(grid)
+    off = dataclasses.replace(_steps_of(SMALL_SPACE), gd_step_x=0.2)
+    with pytest.raises(KeyError):
+        S.random_sampling(S.lookup_reach(grid, cover), SMALL_SPACE, off, variant="C_XY")
+    with pytest.raises(KeyError, match="leaves the grid"):
+        S.endpoint_maps(grid, cover, SMALL_SPACE, off, ("C_XY",))
+    with pytest.raises(ValueError, match="variant"):
+        S.endpoint_maps(grid, cover, SMALL_SPACE, SAMP, ("XY",))
+    with pytest.raises(ValueError, match="one row per setup"):
+        S.endpoint_maps(grid, cover[1:], SMALL_SPACE, SAMP)
+
+
+def test_random_runs_give_the_rows_of_random_sampling():
+    from mavac.experiments import kabir_setups as K
+
+    grid = S.uniform_setups(SMALL_SPACE)
+    cover = toy_reach(n=30, seed=8)(grid)
+    b = K.Baseline("toy", SMALL_SPACE, grid, cover, np.ones(30), np.ones(30, dtype=int))
+    samp = _steps_of(SMALL_SPACE)
+    runs = K.random_runs({"toy": b}, samp, variants=("C_XY", "CA_XYa"), repetitions=3, chunk=2, n_jobs=1)
+    best = K.min_cover_size(cover[S.nondominated(cover)])
+    ref = []
+    for v in ("C_XY", "CA_XYa"):
+        for seed in range(3):
+            res = S.random_sampling(S.lookup_reach(grid, cover), SMALL_SPACE, samp, variant=v, seed=seed,
+                                    target=b.coverable)
+            size = K.min_cover_size(res.nondominated_cover)
+            ref.append(dict(object="toy", variant=v, seed=seed, n_rfc=res.n_rfc, samples=res.samples,
+                            candidates=len(res.setups), nondominated=len(res.nondominated),
+                            covers_target=res.covers_target, setups=size, optimal_setups=best,
+                            optimal=res.covers_target and size == best))
+    pd.testing.assert_frame_equal(runs, pd.DataFrame(ref))
+    shuffled = dataclasses.replace(b, setups=grid[::-1].copy(), cover=cover[::-1].copy())
+    with pytest.raises(ValueError, match="uniform_setups"):
+        K.random_runs({"toy": shuffled}, samp, repetitions=1)

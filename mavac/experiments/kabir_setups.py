@@ -14,6 +14,7 @@ beside its MILP certificate.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,19 +27,20 @@ from matplotlib.patches import Patch
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from ..geometry.parts import load_part
-from ..io import atomic_path
 from ..parallel import map_trials
 from ..params import ReachParams, SamplingParams, SetupPlannerParams, SetupSpaceParams
 from ..planning.iess import n_repeat_for, p_find_min_cover
+from ..planning.instances import write_instance
+from ..planning.reduction import reduce_instance
 from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, milp_remaining_cover,
                                  milp_setup_cover, setup_costs_from_times)
 from ..robots.models import puma560
-from ..setups.dominance import nondominated, pack_rows
+from ..planning.dominance import nondominated, pack_rows
 from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
                             reach_targets_from_part)
 from ..setups.space import WIDE_RESOLUTION, box_summary, reaching_box, wide_setup_space
-from ..setups.sampling import (VARIANTS, gradient_descent, hierarchical_sampling, random_sampling,
-                               uniform_setups, variant_plan)
+from ..setups.sampling import (VARIANTS, EndpointMap, endpoint_maps, gradient_descent, hierarchical_sampling,
+                               random_sampling_on_map, uniform_setups, variant_plan)
 from ..viz.plots import discrete_colorbar, new_figure, plot_mesh
 
 #: Kabir Fig. 6 / Tables II-VI objects, in the paper's order.
@@ -87,6 +89,12 @@ class Baseline:
     def coverable(self) -> np.ndarray:
         """(n,) bool: patches some grid setup reaches."""
         return self.cover.any(axis=0)
+
+    @functools.cached_property
+    def min_setups(self) -> int:
+        """Table II's optimum: fewest grid setups covering every coverable patch (computed once;
+        Tables II-IV all need it)."""
+        return min_cover_size(self.cover[nondominated(self.cover)])
 
     def reach(self, reach_params: ReachParams):
         """Exact reach function: grid setups from the sweep, others by the reach test."""
@@ -164,29 +172,36 @@ def placed_baselines(names, fine: SetupSpaceParams, reach_params: ReachParams, *
 def min_cover_size(cover) -> int:
     """Fewest setups covering every coverable patch (exact; 0 if nothing is coverable).
 
-    A greedy cover gives an upper bound and the LP relaxation a lower bound; when they meet the
-    greedy size is optimal, otherwise the unit-cost MILP (HiGHS) decides. (Unit-cost covers
-    have many optima, which makes HiGHS slow to prove one on ~10^3 setups.)
+    The instance is reduced first (:func:`mavac.planning.reduction.reduce_instance` at unit
+    cost: forced setups counted, implied patches and dominated setups dropped). What is left
+    needs at least two setups (one covering it all would dominate the others and be forced), so
+    a greedy cover of two is optimal and one of three is decided by testing every pair. Beyond,
+    the LP relaxation gives a lower bound; when it meets the greedy size that is optimal,
+    otherwise the unit-cost MILP (HiGHS) decides.
     """
     cover = np.asarray(cover, dtype=bool)
     if cover.shape[0] == 0 or not cover.any():
         return 0
-    cols = np.unique(cover[:, cover.any(axis=0)], axis=1)  # one column per distinct patch pattern
+    red = reduce_instance(cover, np.ones(cover.shape[0]))
+    cols = red.cover
+    if cols.shape[1] == 0:
+        return len(red.forced)
     left, greedy = np.ones(cols.shape[1], dtype=bool), 0
     while left.any():
         left &= ~cols[np.argmax((cols & left).sum(axis=1))]
         greedy += 1
+    if greedy <= 2:
+        return len(red.forced) + greedy
+    if greedy == 3:
+        return len(red.forced) + (2 if _pair_covers(cols) else 3)
     lp = milp(c=np.ones(cols.shape[0]), constraints=LinearConstraint(cols.T.astype(float), lb=1.0),
               bounds=Bounds(0.0, 1.0))
-    lower = math.ceil(lp.fun - 1e-6) if lp.status == 0 else 1
-    if lower >= greedy:
-        return greedy
-    if greedy == 3 and lower == 2:  # decide 2 vs 3 by testing every pair (fast with bitsets)
-        return 2 if _pair_covers(cols) else 3
-    res = milp_setup_cover(cover, np.ones(cover.shape[0]))
+    if lp.status == 0 and math.ceil(lp.fun - 1e-6) >= greedy:
+        return len(red.forced) + greedy
+    res = milp_setup_cover(cols, np.ones(cols.shape[0]))
     if not res.optimal:
         raise RuntimeError(f"MILP did not prove optimality: {res.status}")
-    return len(res.setups)
+    return len(red.forced) + len(res.setups)
 
 
 def _pair_covers(cols: np.ndarray) -> bool:
@@ -214,7 +229,7 @@ def table2(baselines: dict) -> pd.DataFrame:
     rows = []
     for name, b in baselines.items():
         nd = nondominated(b.cover)
-        rows.append(dict(object=name, setups=min_cover_size(b.cover[nd]), nondominated=len(nd),
+        rows.append(dict(object=name, setups=b.min_setups, nondominated=len(nd),
                          n_rfc=len(b.setups)))
     return pd.DataFrame(rows)
 
@@ -232,16 +247,19 @@ def coverage_summary(baselines: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def save_cover_npz(b: Baseline, path, setup_time: float, cleaning_rate: float) -> Path:
-    """Non-dominated cover matrix and eq. 1 costs for the planner benchmark (arrays ``cover``,
-    ``costs``, ``setups``, ``area``)."""
-    nd = nondominated(b.cover)
-    cover = b.cover[nd]
-    costs = setup_costs(cover, b.area, b.passes, setup_time, cleaning_rate)
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, cover=cover, costs=costs, setups=b.setups[nd], area=b.area)
-    return Path(path)
+def write_table2_instances(baselines: dict, folder, setup_time: float, cleaning_rate: float) -> list[Path]:
+    """Each object's Table II planner instance (non-dominated grid setups, eq. 1 costs) as
+    ``folder/kabir_table2_<object>.npz`` (:func:`mavac.planning.instances.write_instance`: arrays
+    ``cover``, ``costs``, ``setups``, ``patch_area``), for ``benchmarks/bench_planner.py``."""
+    paths = []
+    for name, b in baselines.items():
+        nd = nondominated(b.cover)
+        cover = b.cover[nd]
+        costs = setup_costs(cover, b.area, b.passes, setup_time, cleaning_rate)
+        paths.append(write_instance(Path(folder) / f"kabir_table2_{name}.npz", cover, costs, setups=b.setups[nd],
+                                    patch_area=b.area, setup_time=np.float64(setup_time),
+                                    cleaning_rate=np.float64(cleaning_rate)))
+    return paths
 
 
 # ---------------------------------------------------------------- sampling (Tables III-IV, Figs. 7-8)
@@ -275,38 +293,33 @@ def table3(baselines: dict, reach_params: ReachParams, sampling: SamplingParams,
     """
     tasks = []
     for name, b in baselines.items():
-        best = min_cover_size(b.cover[nondominated(b.cover)])
+        best = b.min_setups
         tasks += [_HierarchicalTask(b, v, best, reach_params, sampling) for v in variants]
     return pd.DataFrame(map_trials(_run, tasks, n_jobs=n_jobs, desc="hierarchical sampling"))
 
 
 @dataclass(frozen=True)
 class _RandomTask:
-    """Picklable repetitions of random sampling for one object and variant."""
+    """Picklable repetitions of random sampling for one object and variant, read from the
+    variant's end-point map of the object's baseline grid."""
 
     name: str
-    variant: str
     seeds: tuple
-    grid: np.ndarray
-    cover: np.ndarray
+    emap: EndpointMap
+    target: np.ndarray
     optimum: int
-    space: SetupSpaceParams
-    sampling: SamplingParams
 
     def __call__(self, _=None) -> list[dict]:
-        reach = lookup_reach(self.grid, self.cover)
-        target = self.cover.any(axis=0)
-        rows = []
-        for seed in self.seeds:
-            res = random_sampling(CountingReach(reach), self.space, self.sampling, variant=self.variant, seed=seed,
-                                  target=target)
-            size = min_cover_size(res.nondominated_cover)
-            rows.append(dict(object=self.name, variant=self.variant, seed=seed, n_rfc=res.n_rfc,
-                             samples=res.samples, candidates=len(res.setups),
-                             nondominated=len(res.nondominated), covers_target=res.covers_target,
-                             setups=size, optimal_setups=self.optimum,
-                             optimal=res.covers_target and size == self.optimum))
-        return rows
+        return [self.row(seed, random_sampling_on_map(self.emap, seed=seed, target=self.target))
+                for seed in self.seeds]
+
+    def row(self, seed: int, res) -> dict:
+        """The :func:`random_runs` row of the run ``res`` (a SamplingResult) drawn with ``seed``."""
+        size = min_cover_size(res.nondominated_cover)
+        return dict(object=self.name, variant=self.emap.variant, seed=seed, n_rfc=res.n_rfc, samples=res.samples,
+                    candidates=len(res.setups), nondominated=len(res.nondominated),
+                    covers_target=res.covers_target, setups=size, optimal_setups=self.optimum,
+                    optimal=res.covers_target and size == self.optimum)
 
 
 def _run(task):
@@ -318,30 +331,34 @@ def random_runs(baselines: dict, sampling: SamplingParams, *, variants=VARIANTS,
     """Kabir IX-A2: ``repetitions`` random-sampling runs per object and variant (seeds 0..r-1).
 
     Random seeds are drawn on the baseline grid (``sampling.random_on_grid`` must be True), so
-    every reach answer comes from the baseline sweep. One row per run: ``object, variant,
-    seed, n_rfc, samples, candidates, nondominated, covers_target, setups, optimal_setups,
-    optimal``; a run is optimal when its candidates cover every patch the baseline covers and
-    their minimum cover has the baseline's optimal size. Tasks hold ``chunk`` repetitions each
-    so the workers stay balanced.
+    every reach answer comes from the baseline sweep, and a descent from a grid seed ends where
+    the variant's end-point map (:func:`endpoint_maps`, built once per object) says: the runs
+    read it (:func:`random_sampling_on_map`) and give the rows :func:`random_sampling` would.
+    One row per run: ``object, variant, seed, n_rfc, samples, candidates, nondominated,
+    covers_target, setups, optimal_setups, optimal``; a run is optimal when its candidates
+    cover every patch the baseline covers and their minimum cover has the baseline's optimal
+    size. Tasks hold ``chunk`` repetitions each so the workers stay balanced.
     """
     if not sampling.random_on_grid:
         raise ValueError("sampling.random_on_grid must be True: runs are answered from the baseline grid")
     reps = sampling.repetitions if repetitions is None else repetitions
-    tasks = []
+    rows = []
     for name, b in baselines.items():
-        best = min_cover_size(b.cover[nondominated(b.cover)])
-        for variant in variants:
-            for a in range(0, reps, chunk):
-                seeds = tuple(range(a, min(reps, a + chunk)))
-                tasks.append(_RandomTask(name, variant, seeds, b.setups, b.cover, best, b.space, sampling))
-    rows = map_trials(_run, tasks, n_jobs=n_jobs, desc="random sampling")
+        if not np.array_equal(b.setups, uniform_setups(b.space)):
+            raise ValueError(f"baseline {name!r}: setups must be uniform_setups(space), the grid random sampling draws")
+        best = b.min_setups
+        maps = endpoint_maps(b.setups, b.cover, b.space, sampling, variants)
+        tasks = [_RandomTask(name, tuple(range(a, min(reps, a + chunk))), maps[v], b.coverable, best)
+                 for v in variants for a in range(0, reps, chunk)]
+        rows += map_trials(_run, tasks, n_jobs=n_jobs, desc=f"random sampling, {name}")
     return pd.DataFrame([r for chunk in rows for r in chunk])
 
 
 def exhaustion_diagnosis(b: Baseline, sampling: SamplingParams, variant: str = "CA_XY", seed: int = 0) -> dict:
     """Why a random-sampling run exhausts the grid (Fig. 7): the patches it never covers, how
     many grid setups reach each, and whether the seeds that reach them still do after the
-    conservative round and after the absolute round of the descent.
+    conservative round and after the absolute round of the descent (read from the variant's
+    end-point map, :func:`mavac.setups.sampling.endpoint_maps`).
 
     Returns
     -------
@@ -351,24 +368,21 @@ def exhaustion_diagnosis(b: Baseline, sampling: SamplingParams, variant: str = "
         kept_after_absolute``.
     """
     target = b.cover.any(axis=0)
-    reach = CountingReach(lookup_reach(b.setups, b.cover))
-    run = random_sampling(reach, b.space, sampling, variant=variant, seed=seed, target=target)
+    emap = endpoint_maps(b.setups, b.cover, b.space, sampling, (variant,))[variant]
+    run = random_sampling_on_map(emap, seed=seed, target=target)
     missing = np.flatnonzero(target & ~run.cover.any(axis=0))
     counts = b.cover[:, missing].sum(axis=0)
     seeds = np.flatnonzero(b.cover[:, missing].any(axis=1)) if len(missing) else np.zeros(0, dtype=np.int64)
-    kept = {"conservative": 0, "absolute": 0}
+    had = b.cover[np.ix_(seeds, missing)]
     rounds, _ = variant_plan(variant)
-    for j in seeds:
-        g = gradient_descent(reach, b.setups[j], variant, b.space, sampling, seed_cover=b.cover[j])
-        had = b.cover[j, missing]
-        for name, end in zip(rounds, g.round_ends):
-            covered = reach(end[None])[0]
-            kept[name] += bool(covered[missing][had].all())
+    # a seed keeps the missing patches it had when the round's end (a grid row) still covers them
+    kept = {name: int(np.all(b.cover[np.ix_(ends, missing)] | ~had, axis=1).sum())
+            for name, ends in zip(rounds, emap.round_ends[seeds].T)}
     return dict(object=b.name, variant=variant, seed=seed, n_rfc=run.n_rfc, covers_target=run.covers_target,
                 missing_patches=len(missing), grid_setups_reaching_min=int(counts.min()) if len(counts) else 0,
                 grid_setups_reaching_max=int(counts.max()) if len(counts) else 0,
-                seeds_reaching_missing=len(seeds), kept_after_conservative=kept["conservative"],
-                kept_after_absolute=kept["absolute"] if "absolute" in rounds else None)
+                seeds_reaching_missing=len(seeds), kept_after_conservative=kept.get("conservative", 0),
+                kept_after_absolute=kept.get("absolute"))
 
 
 def table4(runs: pd.DataFrame) -> pd.DataFrame:

@@ -28,6 +28,14 @@ conservative round, Type II ("CA") a conservative round followed by an absolute 
 Variant axes (Table I): ``*_XY`` x and y at fixed alpha; ``*_XY_a`` x and y at fixed alpha, then
 alpha alone (both stages in each round); ``*_XYa`` x, y and alpha together. ``"none"`` is the
 paper's "without gradient descent".
+
+End-point map
+-------------
+When reach is a lookup into a grid's cover matrix and the seeds are grid setups (Table IV's
+random runs), where a descent ends depends on its seed alone. :func:`endpoint_maps` computes it
+for every seed at once (numpy over the seeds, bit-packed covers), with what n_rfc needs, and
+:func:`random_sampling_on_map` reads a run from it: the same result as :func:`random_sampling`,
+without a descent per run. :func:`gradient_descent` stays the reference (and draws Fig. 8).
 """
 
 from __future__ import annotations
@@ -39,9 +47,9 @@ from typing import Callable
 import numpy as np
 
 from ..params import SAMPLING_VARIANTS, SamplingParams, SetupSpaceParams
-from ..tolerances import COUNT_SLACK
-from ..validate import check_int, check_positive, check_size
-from .dominance import nondominated
+from ..tolerances import COUNT_SLACK, SETUP_KEY_QUANTUM
+from ..validate import check_int, check_points, check_positive, check_size
+from ..planning.dominance import nondominated, pack_rows
 from .reach import CountingReach, lookup_reach, setup_keys  # noqa: F401  (re-exported)
 
 ReachFn = Callable[[np.ndarray], np.ndarray]
@@ -529,3 +537,387 @@ def random_sampling(reach: ReachFn, space: SetupSpaceParams, sampling: SamplingP
     return SamplingResult(setups=setups, cover=cover, nondominated=nondominated(cover),
                           n_rfc=reach.n_rfc - before, covers_target=bool(psi.covered[tgt].all()),
                           level=0, samples=len(seeds), seeds=np.array(seeds).reshape(-1, 3))
+
+
+# ---------------------------------------------------------------- end-point map (grid lookups)
+
+
+@dataclass(frozen=True)
+class EndpointMap:
+    """Where the gradient descent from every seed of a grid ends (:func:`endpoint_maps`).
+
+    When reach is a lookup into the grid's cover matrix, a descent from a grid seed depends on
+    the seed alone, so random-sampling runs (:func:`random_sampling_on_map`) only read this.
+
+    Attributes
+    ----------
+    variant : str
+        One of :data:`VARIANTS`.
+    setups : (m, 3) float
+        The grid, rows ``(x [m], y [m], alpha [rad])``.
+    words : (m, w) uint64
+        Patch set of each grid row, bit-packed (:func:`mavac.planning.dominance.pack_rows`).
+    n_patches : int
+        n, the patch count (the bits used in each row of ``words``).
+    end : (m,) int64
+        Grid row where the descent from seed j ends.
+    end_setup : (m, 3) float
+        That end as :func:`gradient_descent` returns it: the seed plus its steps, in the same
+        float arithmetic (it may differ from ``setups[end]`` in the last bits).
+    round_ends : (m, r) int64
+        Grid row at the end of each scoring round (r = 0, 1 or 2).
+    tested_ptr : (m + 1,) int64
+    tested : (t,) int64
+        Distinct grid rows whose reach the descent from seed j asks for, seed included:
+        ``tested[tested_ptr[j]:tested_ptr[j + 1]]`` (the n_rfc of a run is the size of their
+        union over its seeds, as :class:`CountingReach` counts it).
+    """
+
+    variant: str
+    setups: np.ndarray
+    words: np.ndarray
+    n_patches: int
+    end: np.ndarray
+    end_setup: np.ndarray
+    round_ends: np.ndarray
+    tested_ptr: np.ndarray
+    tested: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """What one descent step reads: the grid's bit-packed covers, their patch counts, the index
+    from setup keys to rows, the step and the space."""
+
+    words: np.ndarray
+    counts: np.ndarray
+    axis_keys: tuple
+    ids: np.ndarray
+    id_rows: np.ndarray
+    step: np.ndarray
+    space: SetupSpaceParams
+
+
+def _keys(setups: np.ndarray) -> np.ndarray:
+    """The integers of :func:`setup_keys` of ``setups`` (..., 3), as an int64 array."""
+    return np.round(setups / SETUP_KEY_QUANTUM).astype(np.int64)
+
+
+def _key_ids(axis_keys: tuple, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One int64 per key row from its place in each axis' sorted keys; False where a
+    coordinate is not a grid value."""
+    ids, hit = np.zeros(len(keys), dtype=np.int64), np.ones(len(keys), dtype=bool)
+    for k, values in enumerate(axis_keys):
+        at = np.minimum(np.searchsorted(values, keys[:, k]), len(values) - 1)
+        hit &= values[at] == keys[:, k]
+        ids = ids * len(values) + at
+    return ids, hit
+
+
+def _grid(setups: np.ndarray, words: np.ndarray, step: np.ndarray, space: SetupSpaceParams) -> _Grid:
+    keys = _keys(setups)
+    axis_keys = tuple(np.unique(keys[:, k]) for k in range(3))
+    ids, _ = _key_ids(axis_keys, keys)
+    order = np.argsort(ids, kind="stable")
+    if np.any(np.diff(ids[order]) == 0):
+        raise ValueError("setups must be distinct setups (two rows have the same setup_keys)")
+    counts = np.bitwise_count(words).sum(axis=1, dtype=np.int64)
+    return _Grid(words, counts, axis_keys, ids[order], order, step, space)
+
+
+def _rows(g: _Grid, points: np.ndarray) -> np.ndarray:
+    """Grid row of each of ``points`` (k, 3) by setup key, -1 for points off the grid."""
+    ids, hit = _key_ids(g.axis_keys, _keys(points))
+    at = np.minimum(np.searchsorted(g.ids, ids), len(g.ids) - 1)
+    return np.where(hit & (g.ids[at] == ids), g.id_rows[at], -1)
+
+
+def _candidate_setups(g: _Grid, cur: np.ndarray, axes) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`neighbours` of every row of ``cur`` (a, 3) at once, in the same float arithmetic.
+
+    Returns
+    -------
+    cand : (a, s, 3) float
+        s = 2 len(axes) slots in the order of :func:`neighbours` (axis by axis, minus first).
+    inside : (a, s) bool
+        False for a candidate :func:`neighbours` leaves out (out of the x, y or alpha range).
+    """
+    lo = np.array([g.space.x_min, g.space.y_min, g.space.alpha_min])
+    hi = np.array([g.space.x_max, g.space.y_max, g.space.alpha_max])
+    circle = full_circle(g.space)
+    cands, inside = [], []
+    for k in axes:
+        for sign in (-1.0, 1.0):
+            cand = cur.copy()
+            cand[:, k] += sign * g.step[k]
+            if k == 2 and circle:
+                cand[:, 2] = _wrap_alpha(cand[:, 2], g.space)
+                inside.append(np.ones(len(cur), dtype=bool))
+            else:
+                inside.append((lo[k] - COUNT_SLACK <= cand[:, k]) & (cand[:, k] <= hi[k] + COUNT_SLACK))
+            cands.append(cand)
+    return np.stack(cands, axis=1), np.stack(inside, axis=1)
+
+
+def _grows(words: np.ndarray, counts: np.ndarray, a: np.ndarray, b: np.ndarray,
+           block: int = 1 << 14) -> np.ndarray:
+    """``out[i]``: row ``b[i]`` covers a strict superset of the patches of row ``a[i]``."""
+    out = counts[b] > counts[a]
+    at = np.flatnonzero(out)
+    for s in range(0, len(at), block):  # blocks bound the (k, w) temporaries
+        i = at[s:s + block]
+        out[i] = ~np.any(words[a[i]] & ~words[b[i]], axis=1)
+    return out
+
+
+@dataclass(frozen=True)
+class _Table:
+    """Candidates of every grid row along one axis set, from the grid's own floats.
+
+    Attributes
+    ----------
+    keys : (m, s, 3) int64
+        Setup keys of the candidates.
+    rows : (m, s) int64
+        Their grid rows, -1 when out of range or off the grid.
+    grows : (m, s) bool
+        The candidate covers a strict superset of the row's patches (a conservative move).
+    """
+
+    keys: np.ndarray
+    rows: np.ndarray
+    grows: np.ndarray
+
+
+def _table(g: _Grid, setups: np.ndarray, axes) -> _Table:
+    """:class:`_Table` of the grid ``setups`` (m, 3) along ``axes``."""
+    cand, inside = _candidate_setups(g, setups, axes)
+    rows = np.where(inside, _rows(g, cand.reshape(-1, 3)).reshape(inside.shape), -1)
+    a, s = np.nonzero(rows >= 0)
+    grows = np.zeros(rows.shape, dtype=bool)
+    grows[a, s] = _grows(g.words, g.counts, a, rows[a, s])
+    return _Table(_keys(cand), rows, grows)
+
+
+def _step_rows(g: _Grid, t: _Table, pos: np.ndarray, cur: np.ndarray, axes):
+    """Candidates of the setups ``cur`` (a, 3) on grid rows ``pos`` (a,).
+
+    A candidate whose key is the table's (the usual case) takes the table's row; one that
+    differs, by the rounding a path picks up, is looked up like :func:`lookup_reach` would.
+
+    Returns
+    -------
+    cand : (a, s, 3) float
+    rows : (a, s) int64
+        Grid row of each candidate, -1 where :func:`neighbours` leaves it out.
+    grows : (a, s) bool
+        The candidate is a conservative move (a strict superset of the patches at ``pos``).
+    """
+    cand, inside = _candidate_setups(g, cur, axes)
+    use = inside & (t.rows[pos] >= 0) & np.all(_keys(cand) == t.keys[pos], axis=2)
+    rows, grows = np.where(use, t.rows[pos], -1), np.where(use, t.grows[pos], False)
+    a, s = np.nonzero(inside & ~use)
+    if len(a):
+        rows[a, s] = _rows(g, cand[a, s])
+        if np.any(rows[a, s] < 0):
+            raise KeyError("a gradient-descent step leaves the grid: the steps must be multiples of its "
+                           "resolution")
+        grows[a, s] = _grows(g.words, g.counts, pos[a], rows[a, s])
+    return cand, rows, grows
+
+
+def _stage(g: _Grid, t: _Table, pos: np.ndarray, cur: np.ndarray, axes, scoring: str):
+    """One stage of :func:`gradient_descent` (one scoring, one axis set) from every seed at once.
+
+    Parameters
+    ----------
+    t : _Table
+        Candidates of the grid rows along ``axes``.
+    pos : (m,) int64
+        Grid row of each seed's current setup.
+    cur : (m, 3) float
+        That setup as the descent holds it.
+
+    Returns
+    -------
+    pos, cur : the same after the stage
+    tested : (2, t) int64
+        Pairs (seed, grid row) of every candidate reach-tested on the way.
+    """
+    pos, cur = pos.copy(), cur.copy()
+    active, tested = np.arange(len(pos)), []
+    while len(active):
+        cand, rows, grows = _step_rows(g, t, pos[active], cur[active], axes)
+        a, s = np.nonzero(rows >= 0)
+        tested.append(np.stack([active[a], rows[a, s]]))
+        # the score of a candidate that can win a move (absolute: any; conservative: a strict
+        # superset, every other conservative score is below |P1|), -1 for the rest
+        size = np.where(rows >= 0, g.counts[np.maximum(rows, 0)], -1)
+        scores = size if scoring == "absolute" else np.where(grows, size, -1)
+        best = np.argmax(scores, axis=1)  # first maximum, as gradient_descent
+        move = scores[np.arange(len(active)), best] > g.counts[pos[active]]
+        active, best, took = active[move], best[move], np.flatnonzero(move)
+        pos[active] = rows[took, best]
+        cur[active] = cand[took, best]
+    return pos, cur, np.concatenate(tested, axis=1) if tested else np.zeros((2, 0), dtype=np.int64)
+
+
+def _csr(pairs: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct (seed, row) pairs (2, t) as CSR ``(ptr (m + 1,), rows (k,))`` by seed."""
+    code = np.sort(pairs[0] * m + pairs[1])
+    code = code[np.r_[True, code[1:] != code[:-1]]]  # (np.unique hashes: slower here)
+    ptr = np.zeros(m + 1, dtype=np.int64)
+    np.cumsum(np.bincount(code // m, minlength=m), out=ptr[1:])
+    return ptr, code % m
+
+
+@dataclass(frozen=True)
+class _Descent:
+    """All seeds' descents after some rounds: current rows ``pos`` (m,), setups ``cur`` (m, 3),
+    the (seed, row) pairs reach-tested so far and the rows at each round's end."""
+
+    pos: np.ndarray
+    cur: np.ndarray
+    pairs: tuple
+    ends: tuple
+
+
+def _round(g: _Grid, tables: dict, start: _Descent, stages, scoring: str) -> _Descent:
+    """One scoring round (its stages in order) of every seed's descent."""
+    pos, cur, pairs = start.pos, start.cur, start.pairs
+    for axes in stages:
+        pos, cur, tested = _stage(g, tables[axes], pos, cur, axes, scoring)
+        pairs += (tested,)
+    return _Descent(pos, cur, pairs, start.ends + (pos,))
+
+
+def endpoint_maps(setups, cover, space: SetupSpaceParams, sampling: SamplingParams,
+                  variants=VARIANTS) -> dict[str, EndpointMap]:
+    """End of the gradient descent of each variant from every seed of a grid, all seeds at once.
+
+    Reach is the grid's own cover matrix (:func:`lookup_reach` without fallback): each map holds
+    what :func:`gradient_descent` gives seed by seed (end, float end setup, round ends, reach
+    tests), computed by numpy over the seeds still moving, one step of the discrete steepest
+    ascent at a time, on bit-packed covers. A "CA" variant continues its "C" variant's
+    conservative round, which is computed once for both.
+
+    Parameters
+    ----------
+    setups : (m, 3) float
+        Grid setups ``(x [m], y [m], alpha [rad])``, distinct; usually :func:`uniform_setups`.
+    cover : (m, n) bool
+        ``cover[j, i]``: setup j reaches patch i.
+    space : SetupSpaceParams
+    sampling : SamplingParams
+        Only the ``gd_step_*`` are read.
+    variants : sequence of str
+        Each one of :data:`VARIANTS`.
+
+    Returns
+    -------
+    dict variant -> EndpointMap
+
+    Raises
+    ------
+    KeyError
+        When a step from some seed leaves the grid (where :func:`lookup_reach` would raise).
+    """
+    plans = {v: variant_plan(v) for v in variants}
+    setups = check_points("setups", setups, 3)
+    words = pack_rows(cover)
+    m = len(setups)
+    if words.shape[0] != m:
+        raise ValueError(f"cover must have one row per setup ({m}), got {words.shape[0]}")
+    g = _grid(setups, words, gd_step(sampling), space)
+    seeds = np.arange(m)
+    start = _Descent(seeds, setups.copy(), (np.stack([seeds, seeds]),), ())
+    tables = {axes: _table(g, setups, axes) for _, stages in plans.values() for axes in stages}
+    rounds_done: dict = {}
+    maps = {}
+    for v, (rounds, stages) in plans.items():
+        d = start
+        for i, scoring in enumerate(rounds):
+            if (stages, rounds[:i + 1]) not in rounds_done:
+                rounds_done[stages, rounds[:i + 1]] = _round(g, tables, d, stages, scoring)
+            d = rounds_done[stages, rounds[:i + 1]]
+        ptr, rows = _csr(np.concatenate(d.pairs, axis=1), m)
+        maps[v] = EndpointMap(variant=v, setups=setups, words=words, n_patches=np.asarray(cover).shape[1],
+                              end=d.pos, end_setup=d.cur,
+                              round_ends=np.array(d.ends, dtype=np.int64).reshape(len(d.ends), m).T,
+                              tested_ptr=ptr, tested=rows)
+    return maps
+
+
+def _union_size(ptr: np.ndarray, rows: np.ndarray, seeds: np.ndarray, m: int) -> int:
+    """Distinct rows of the CSR lists of ``seeds`` (k,) together."""
+    lens = ptr[seeds + 1] - ptr[seeds]
+    at = np.repeat(ptr[seeds] - np.cumsum(lens) + lens, lens) + np.arange(lens.sum())
+    hit = np.zeros(m, dtype=bool)
+    hit[rows[at]] = True
+    return int(hit.sum())
+
+
+def _psi_order(emap: EndpointMap, order: np.ndarray, need: np.ndarray):
+    """The ends a run adds to ψ, drawing the seeds in ``order``, until their patches hold
+    ``need`` (packed (w,) uint64).
+
+    Returns
+    -------
+    found : (k,) int64
+        Grid rows of the ends, in the order the run finds them.
+    first : (k,) int64
+        Place in ``order`` of the seed that first reached each.
+    covers : bool
+        Whether the last of them completed ``need`` (else every seed was drawn).
+    """
+    m = len(order)
+    seen, acc = np.zeros(m, dtype=bool), np.zeros_like(need)
+    found, first = [], []
+    start, size = 0, 64
+    while start < m:  # blocks of growing size: a run that ends early reads only a few seeds
+        ends, at = np.unique(emap.end[order[start:start + size]], return_index=True)
+        fresh = ~seen[ends]
+        by_time = np.argsort(at[fresh])
+        ends, at = ends[fresh][by_time], at[fresh][by_time] + start
+        seen[ends] = True
+        cum = np.bitwise_or.accumulate(emap.words[ends], axis=0) | acc
+        done = np.flatnonzero(np.all((cum & need) == need, axis=1))
+        if len(done):
+            found.append(ends[:done[0] + 1])
+            first.append(at[:done[0] + 1])
+            return np.concatenate(found), np.concatenate(first), True
+        found.append(ends)
+        first.append(at)
+        acc = cum[-1] if len(cum) else acc
+        start, size = start + size, 2 * size
+    return np.concatenate(found), np.concatenate(first), False
+
+
+def random_sampling_on_map(emap: EndpointMap, *, seed: int = 0, target=None) -> SamplingResult:
+    """:func:`random_sampling` on the grid of an :class:`EndpointMap`, read from the map.
+
+    The result equals ``random_sampling(CountingReach(lookup_reach(emap.setups, cover)), space,
+    sampling, variant=emap.variant, seed=seed, target=target)`` with ``random_on_grid`` when
+    ``emap.setups`` is ``uniform_setups(space)``, the grid it draws from: the same seeds (one
+    permutation of the grid), setups in the order found (each as the first descent reaching it
+    returned it), covers, samples and n_rfc (the reach tests of the drawn seeds' descents,
+    each setup once).
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the ``numpy.random.Generator`` that draws the samples.
+    target : (n,) bool, optional
+        Patches to cover (default all).
+    """
+    m = len(emap.setups)
+    order = np.random.default_rng(seed).permutation(m)
+    need = pack_rows(_target_mask(target, emap.n_patches)[None])[0]
+    found, first, covers = _psi_order(emap, order, need)
+    samples = int(first[-1]) + 1 if covers else m
+    drawn = order[:samples]
+    cover = np.unpackbits(emap.words[found].view(np.uint8), axis=1, count=emap.n_patches,
+                          bitorder="little").astype(bool)
+    return SamplingResult(setups=emap.end_setup[order[first]], cover=cover, nondominated=nondominated(cover),
+                          n_rfc=_union_size(emap.tested_ptr, emap.tested, drawn, m), covers_target=covers,
+                          level=0, samples=samples, seeds=emap.setups[drawn])
