@@ -11,7 +11,7 @@ NB := $(sort $(wildcard notebooks/*.ipynb))
 # the same seed give the same CSV, byte for byte (parallelism comes from joblib processes).
 export OMP_NUM_THREADS := 1
 
-.PHONY: test unit notebooks reproduce bench system-deps browser clean
+.PHONY: test unit notebooks reproduce verify bench system-deps browser clean
 
 test: unit notebooks
 
@@ -61,14 +61,66 @@ unit: system-deps browser $(STAMP)
 notebooks: system-deps $(STAMP)
 	MAVAC_FAST=1 $(PY) -m pytest -q --nbval-lax --nbval-current-env -p no:cacheprovider $(NB)
 
-# Paper scale: writes figures/ and data/results/. Executed copies go to build/executed.
-# Trials run two at a time (MAVAC_JOBS, the machine's 2 cores); results do not depend on it.
+# Paper scale: writes figures/ and data/results/ (executed copies in build/executed), two
+# notebooks at a time (NB_JOBS) with MAVAC_JOBS trial worker(s) each: two busy processes on
+# the machine's 2 cores. Results do not depend
+# on the schedule: each trial takes its seed from its argument. Every notebook's wall and CPU
+# time goes to data/results/reproduce_times.csv, the commit and settings that made each result
+# file to data/results/provenance.json (mavac/verify.py). ONLY=05 runs one notebook.
 reproduce: system-deps $(STAMP)
-	mkdir -p build/executed
-	for nb in $(NB); do \
-	  MAVAC_FAST=0 MAVAC_JOBS=$${MAVAC_JOBS:-2} $(VENV)/bin/jupyter nbconvert --to notebook --execute \
-	    --ExecutePreprocessor.timeout=-1 --output-dir build/executed "$$nb" || exit 1; \
-	done
+	@start=$$(date +%s); \
+	$(MAKE) --no-print-directory -j$(NB_JOBS) at-scale OUT=. EXECUTED=build/executed \
+	  && $(PY) -m mavac.verify finish --out . --executed build/executed --started $$start
+
+# Runs the paper-scale notebooks into VERIFY_OUT, from an empty cache unless VERIFY_CACHE says
+# otherwise, then compares every CSV, JSON and .npz they wrote with the committed one; exits
+# non-zero on any difference (docs/reproduce.md). ONLY=05 runs and checks one notebook.
+verify: system-deps $(STAMP)
+	rm -rf $(VERIFY_OUT)
+	@start=$$(date +%s); \
+	MAVAC_CACHE=$(VERIFY_CACHE) $(MAKE) --no-print-directory -j$(NB_JOBS) at-scale OUT=$(VERIFY_OUT) \
+	    EXECUTED=$(VERIFY_OUT)/executed \
+	  && $(PY) -m mavac.verify finish --out $(VERIFY_OUT) --executed $(VERIFY_OUT)/executed --started $$start
+	$(PY) -m mavac.verify --fresh $(VERIFY_OUT) --committed . $(if $(ONLY),--only $(ONLY))
+
+NB_NUM := $(foreach n,$(NB),$(firstword $(subst _, ,$(notdir $(n)))))
+RUNS := $(addprefix run-,$(NB_NUM))
+.PHONY: at-scale $(RUNS)
+NB_JOBS ?= 2
+MAVAC_JOBS ?= 1
+OUT ?= .
+EXECUTED ?= build/executed
+VERIFY_OUT ?= build/verify
+VERIFY_CACHE ?= $(abspath $(VERIFY_OUT))/cache
+ifneq ($(ONLY),)
+  ifeq ($(filter $(ONLY),$(NB_NUM)),)
+    $(error ONLY must be a notebook number ($(NB_NUM)), got '$(ONLY)')
+  endif
+endif
+
+at-scale: $(if $(ONLY),run-$(ONLY),$(RUNS))
+
+$(RUNS): run-%:
+	MAVAC_FAST=0 MAVAC_JOBS=$(MAVAC_JOBS) $(PY) -m mavac.verify run $* --out $(OUT) --executed $(EXECUTED)
+
+# Two lanes, side by side: A = 00 01 02 03 04 05 09 10 11, B = 06 07 08 12 (the longest).
+# Notebooks sharing an on-disk cache (build/cache) keep their order, so the first computes an
+# entry and the next reads it (never two computing it at once): 01-05 the machines'
+# reachability maps and offline plans; 06 -> 07 -> 08 the Kabir baseline reach sweeps; 12 both.
+# 00, 09, 10 and 11 use no disk cache: they follow 05 only so that lane B always has a core.
+ifeq ($(ONLY),)
+run-01: run-00
+run-02: run-01
+run-03: run-02
+run-04: run-03
+run-05: run-04
+run-09: run-05
+run-10: run-09
+run-11: run-10
+run-07: run-06
+run-08: run-07
+run-12: run-05 run-08
+endif
 
 bench: system-deps $(STAMP)
 	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
