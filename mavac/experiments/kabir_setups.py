@@ -91,10 +91,15 @@ class Baseline:
         return self.cover.any(axis=0)
 
     @functools.cached_property
+    def nondominated(self) -> np.ndarray:
+        """(k,) int: rows of the non-dominated grid setups (computed once)."""
+        return nondominated(self.cover)
+
+    @functools.cached_property
     def min_setups(self) -> int:
         """Table II's optimum: fewest grid setups covering every coverable patch (computed once;
         Tables II-IV all need it)."""
-        return min_cover_size(self.cover[nondominated(self.cover)])
+        return min_cover_size(self.cover[self.nondominated])
 
     def reach(self, reach_params: ReachParams):
         """Exact reach function: grid setups from the sweep, others by the reach test."""
@@ -228,7 +233,7 @@ def table2(baselines: dict) -> pd.DataFrame:
     """
     rows = []
     for name, b in baselines.items():
-        nd = nondominated(b.cover)
+        nd = b.nondominated
         rows.append(dict(object=name, setups=b.min_setups, nondominated=len(nd),
                          n_rfc=len(b.setups)))
     return pd.DataFrame(rows)
@@ -253,7 +258,7 @@ def write_table2_instances(baselines: dict, folder, setup_time: float, cleaning_
     ``cover``, ``costs``, ``setups``, ``patch_area``), for ``benchmarks/bench_planner.py``."""
     paths = []
     for name, b in baselines.items():
-        nd = nondominated(b.cover)
+        nd = b.nondominated
         cover = b.cover[nd]
         costs = setup_costs(cover, b.area, b.passes, setup_time, cleaning_rate)
         paths.append(write_instance(Path(folder) / f"kabir_table2_{name}.npz", cover, costs, setups=b.setups[nd],
