@@ -81,6 +81,8 @@ def test_orlib_scp4_instances_are_proven_optimal(name):
     res = certified_cover(cover, costs)
     assert res.optimal and res.cost == ORLIB_OPTIMA[name]
     assert cover[res.setups].any(axis=0).all()
+    # 200 rows of unit-ish costs: the size bound is far above the enumeration's, so the LP proves
+    assert res.proof in ("lp", "milp") and res.lp_bound <= res.cost and res.fixed_setups > 0
 
 
 def test_read_scp_refuses_a_file_that_is_not_one(tmp_path):

@@ -115,7 +115,7 @@ def reduce_instance(cover: np.ndarray, costs: np.ndarray, *, check: bool = True)
         if rows_dirty:
             rows, cols_f, new = _apply_forced(cover[np.ix_(rows, cols)], rows, cols)
             forced += new
-            keep = cols_f[_minimal_columns(cover[np.ix_(rows, cols_f)])]
+            keep = cols_f[minimal_columns(cover[np.ix_(rows, cols_f)])]
             cols_dirty = cols_dirty or len(keep) < len(cols)
             cols, rows_dirty = keep, False
         if cols_dirty:
@@ -157,7 +157,7 @@ def _apply_forced(sub: np.ndarray, rows: np.ndarray, cols: np.ndarray):
     return rows[keep_rows], cols[~done], rows[taken].tolist()
 
 
-def _minimal_columns(sub: np.ndarray) -> np.ndarray:
+def minimal_columns(sub: np.ndarray) -> np.ndarray:
     """Columns whose covering set contains no other column's (lowest index among equals).
 
     Column k implies column i when ``set(k) <= set(i)``, i.e. when the complement of column i

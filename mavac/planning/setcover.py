@@ -472,7 +472,7 @@ class MilpResult:
         when HiGHS proved none).
     proof : str
         What proved it: "milp", or for :func:`mavac.planning.certified.certified_cover`
-        "reduction", "enumeration", "milp" or "none".
+        "reduction", "enumeration", "lp", "milp" or "none".
     """
 
     setups: np.ndarray
@@ -649,7 +649,7 @@ class SetupCoverResult:
     certificate_bound : float or None
         Proven lower bound on the optimum, s.
     certificate_proof : str or None
-        What proved it: "reduction", "enumeration" or "milp" (see
+        What proved it: "reduction", "enumeration", "lp" or "milp" (see
         :func:`mavac.planning.certified.certified_cover`).
     node_limited : bool
     warnings : list of str

@@ -83,7 +83,7 @@ class SetupPlan:
     certificate_bound : float or None, s
         Proven lower bound on the optimum.
     certificate_proof : str or None
-        What proved the optimum: "reduction", "enumeration" or "milp".
+        What proved the optimum: "reduction", "enumeration", "lp" or "milp".
     """
 
     part_name: str
