@@ -53,6 +53,17 @@ def test_size_bound_follows_from_the_incumbent_and_the_cheapest_setups():
     assert res.optimal and res.cost == 21.0 and res.setups.tolist() == [2, 3]
 
 
+def test_shallow_covers_are_searched_even_when_the_greedy_size_bound_is_too_large():
+    # greedy 11 bounds the size at 3 > max_enumerated_size 2; the two-setup pass finds 10, whose
+    # bound (2) the enumeration then reaches: proven without the integer program
+    cover = np.array([[1, 0, 1, 0], [0, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 0],
+                      [0, 0, 0, 1]], dtype=bool)
+    costs = np.array([6.0, 1.0, 9.0, 7.0, 3.0, 2.0, 2.0])
+    res = certified_cover(cover, costs, params=CertifyParams(max_enumerated_size=2))
+    assert res.incumbent_cost == 11.0 and res.size_bound == 3
+    assert res.optimal and res.cost == 10.0 and res.proof == "enumeration" and res.milp_nodes == 0
+
+
 def test_budget_exhausted_reports_a_bound_not_a_proof():
     rng = np.random.default_rng(3)
     cover = rng.random((60, 40)) < 0.12

@@ -9,11 +9,11 @@ planning makes most instances easy to prove:
 2. a greedy cover (cheapest cost per newly covered patch, redundant setups removed) gives an
    incumbent ``T``; since every setup costs at least ``c_min``, no cover of more than ``k``
    setups, the largest ``k`` whose ``k`` cheapest costs sum below ``T``, can beat it;
-3. when that bound is small (``CertifyParams.max_enumerated_size``), an exact enumeration on
-   Python-int bitsets over covers of 1, 2, ... setups improves the incumbent and, once it
-   reaches the size bound, proves it: it branches on the uncovered patch that the fewest
-   setups reach (every cover holds one of them), cheapest setup first, excluding the setups
-   tried in earlier branches, and prunes on cost;
+3. an exact enumeration on Python-int bitsets over covers of 1, 2, ... setups improves the
+   incumbent and, once it reaches the size bound, proves it; past two setups it deepens only
+   while that bound is small (``CertifyParams.max_enumerated_size``). It branches on the
+   uncovered patch that the fewest setups reach (every cover holds one of them), cheapest
+   setup first, excluding the setups tried in earlier branches, and prunes on cost;
 4. when the bound is larger (or the enumeration's node budget runs out), the LP relaxation
    by column generation (:mod:`mavac.planning.lp_bound`) gives a lower bound and the
    setups that carry it; HiGHS on those setups alone improves the incumbent (the greedy cover
@@ -128,10 +128,9 @@ def certified_cover(cover: np.ndarray, costs: np.ndarray, *, params: CertifyPara
     greedy_cost = math.fsum(cost_list[j] for j in best)
     found = _Search(best, greedy_cost, incumbent=greedy_cost)
     found.size_bound = _size_bound(red.costs, found.cost, params.rel_tol)
-    if found.size_bound <= params.max_enumerated_size:
-        found.rows, found.cost, found.nodes, done = _enumerate(red.cover, cost_list, best, found.cost, params)
-        if done:
-            return _result(red, found, "optimal", found.cost, "enumeration", t0)
+    found.rows, found.cost, found.nodes, done = _enumerate(red.cover, cost_list, best, found.cost, params)
+    if done:
+        return _result(red, found, "optimal", found.cost, "enumeration", t0)
     status, bound, proof = _prove_by_lp_and_milp(red, found, params)
     return _result(red, found, status, bound, proof, t0)
 
@@ -221,6 +220,11 @@ def _size_bound(costs: np.ndarray, incumbent: float, rel_tol: float) -> int:
     return int(np.count_nonzero(cheapest < incumbent * (1.0 - rel_tol)))
 
 
+# Ours: covers of one and two setups are always searched (cheap: the rarest patch's setups and
+# their children), since finding one often brings the size bound within reach.
+_PROBE_DEPTH = 2
+
+
 def _enumerate(cover: np.ndarray, costs: list, best: list, best_cost: float, params: CertifyParams):
     """Exact search of :func:`certified_cover`, step 3, within ``params.enumeration_nodes``.
 
@@ -241,9 +245,11 @@ def _enumerate(cover: np.ndarray, costs: list, best: list, best_cost: float, par
     tree = _Tree(masks, costs, reaching, min(costs), params.rel_tol, (1 << cover.shape[1]) - 1)
     nodes, depth = 0, 1
     while True:
-        if depth > _size_bound(np.asarray(costs), best_cost, params.rel_tol):
+        size_bound = _size_bound(np.asarray(costs), best_cost, params.rel_tol)
+        if depth > size_bound:
             return sorted(best), best_cost, nodes, True
-        if depth > params.max_enumerated_size:
+        # Past the probe depths, deepen only while the incumbent's size bound is within reach.
+        if depth > params.max_enumerated_size or (depth > _PROBE_DEPTH and size_bound > params.max_enumerated_size):
             return sorted(best), best_cost, nodes, False
         found, nodes = tree.search(depth, best_cost, params.enumeration_nodes - nodes, nodes)
         if found is None:
