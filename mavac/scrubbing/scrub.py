@@ -170,6 +170,7 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
         J = pin.getFrameJacobian(robot, data, fid, pin.LOCAL_WORLD_ALIGNED)
         T = data.oMf[fid]
         tau = _scrub_torques(robot, q, dq, J, T, schedule, i, gains, state, force[i - 1] if i else 0.0, dt)
+        # gravity last, as the law's sum always had it; one pinocchio data for the whole loop
         c.apply_torques_unchecked(tau + np.array(pin.computeGeneralizedGravity(robot, gravity_data, q)))
         cell.world.step_once()
         summary = cell.world.contact_forces(c.body, cell.part, link_a=cell.pad_link)
@@ -218,8 +219,8 @@ class Gains(NamedTuple):
 
 
 def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) -> np.ndarray:
-    """Hybrid impedance/force law at sample ``i`` (tool-frame gains), plus gravity and a
-    null-space pull towards the previous posture (the iiwa is redundant)."""
+    """Hybrid impedance/force law at sample ``i`` (tool-frame gains), plus a null-space pull
+    towards the previous posture (the iiwa is redundant); the caller adds gravity."""
     R = schedule.rotations[i]
     e_t = R.T @ (schedule.positions[i] - T.translation)
     v = J @ dq
@@ -241,7 +242,7 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
     null = np.eye(len(q)) - J.T @ J_pinv.T
     q_rest = state.setdefault("q_rest", q.copy())
     tau_null = null @ (g.kn * (q_rest - q) - g.dn * dq)
-    return J.T @ wrench + tau_null  # the caller adds gravity (one pinocchio data for the whole loop)
+    return J.T @ wrench + tau_null
 
 
 def _contact_step(cell, summary, pad_twist, state, dt) -> tuple:
