@@ -278,3 +278,19 @@ def test_suck_removes_each_heap_once():
     assert dust.suck(np.array([0.01, 0.0, 0.0]), 0.045).tolist() == []
     assert dust.suck(np.array([1.0, 0.0, 0.02]), 0.03).tolist() == [2]
     assert dust.cleaned.all() and dust.suck(np.zeros(3), 10.0).tolist() == []
+
+
+def test_suck_along_a_path_equals_testing_every_heap_at_every_step():
+    rng = np.random.default_rng(2)
+    heaps = rng.uniform(0.0, 0.5, (60, 3))
+    dust = DustField.of(heaps, DustParams())
+    present = np.ones(len(heaps), dtype=bool)
+    tip, got, expected = np.full(3, 0.25), [], []
+    for step in range(4000):
+        tip = np.clip(tip + rng.normal(0.0, 0.008, 3), 0.0, 0.5)
+        radius = 0.03 if step < 3000 else 0.05  # a new radius is tested afresh
+        got.append(dust.suck(tip, radius).tolist())
+        hit = np.flatnonzero(present & (np.linalg.norm(heaps - tip, axis=1) <= radius))  # the test it replaces
+        present[hit] = False
+        expected.append(hit.tolist())
+    assert got == expected and 10 < (~present).sum() < len(heaps)
