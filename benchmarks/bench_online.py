@@ -4,8 +4,9 @@ the paper's reading, seed 1.
 The offline plan comes from the disk cache (computed on the first run, not timed). Prints the
 trial's result and whether it equals the committed ``data/results/mavac_table2_trials.csv`` row
 of the same scene, reading and seed (no wall clock decides anything in a trial, so it must),
-then, on the last two lines, ``SECONDS rrt_approach_median <x>`` (median RRT-Connect wall time
-per approach plan; the paper needed "several seconds") and ``SECONDS online_trial_test_bench <x>``.
+then the trial's CPU seconds (steadier than wall time on a shared machine) and, on the last two
+lines, ``SECONDS rrt_approach_median <x>`` (median RRT-Connect wall time per approach plan; the
+paper needed "several seconds") and ``SECONDS online_trial_test_bench <x>`` (wall time).
 """
 
 from __future__ import annotations
@@ -36,9 +37,9 @@ def committed_row() -> dict | None:
 def main() -> None:
     plan = offline_plan(SCENE, READING)
     machine = load_machine(SCENE)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     result = run_trial(machine, plan, params=online_params(READING), seed=SEED)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     print(f"{SCENE}, {READING} reading, seed {SEED}: {result.n_heaps} heaps, {result.n_cleaned} cleaned "
           f"({result.cleaning_pct:.1f} %, simulated), simulated time {result.times.sim_time_s:.0f} s, "
           f"{len(result.rrt_approach_seconds)} approach plans")
@@ -48,6 +49,7 @@ def main() -> None:
     else:
         same = (row["heaps"], row["cleaned"]) == (result.n_heaps, result.n_cleaned)
         print(f"committed row: {row['heaps']} heaps, {row['cleaned']} cleaned -> {'equal' if same else 'DIFFERENT'}")
+    print(f"CPU seconds of the trial: {cpu:.1f}")
     rrt = float(np.median(result.rrt_approach_seconds)) if result.rrt_approach_seconds else float("nan")
     print(f"SECONDS rrt_approach_median {rrt:.4f}")
     print(f"SECONDS online_trial_test_bench {wall:.1f}")

@@ -11,6 +11,7 @@ from mavac.params import BimanualCellParams
 from mavac.robots import kinematics as K
 from mavac.robots.models import iiwa7, load_robot
 from mavac.scrubbing.cell import cell_robots, flange_T_part, holder_flange_targets, holder_ik
+from mavac.scrubbing import cell as C
 from mavac.scrubbing.holding import HeldSetups
 from mavac.setups.reach import FeasibleReach, base_T_part
 
@@ -111,3 +112,26 @@ def test_cell_params_name_the_field():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert BimanualCellParams().world_T_holder[0, 3] == pytest.approx(1.2)
+
+
+def test_held_setups_build_the_part_checkers_once_and_agree_with_a_fresh_build(arms, monkeypatch):
+    cleaner, holder = arms
+    cell = BimanualCellParams()
+    part = load_part("bowl")
+    built = []
+
+    class Counting(C.CollisionChecker):
+        def __init__(self, *args, **kwargs):
+            built.append(1)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(C, "CollisionChecker", Counting)
+    held = HeldSetups(cleaner, holder, part.mesh, cell)
+    setups = np.array([[0.1, 0.1, 0.0], [0.0, -0.1, 1.0], [-0.1, 0.05, 2.5]])
+    first = held(setups)
+    assert len(built) == 2  # the holding arm's links and the cleaning arm, against the part
+    assert held(setups).tolist() == first.tolist() and held(setups[::-1]).tolist() == first[::-1].tolist()
+    assert len(built) == 2
+    q, ok = held.holder_q(setups)
+    fresh = C.part_clear_of_arms(cleaner, holder, part.mesh, base_T_part(setups[ok], cell.space), q[ok], cell)
+    assert first[ok].tolist() == fresh.tolist() and len(built) == 4

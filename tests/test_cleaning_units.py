@@ -10,11 +10,13 @@ from mavac.cleaning.approach import approach_orientations, approach_poses
 from mavac.cleaning.clustering import areas_from_nodes, tsp_order
 from mavac.cleaning.detection import detect_dust, dust_mask, match_nodes
 from mavac.cleaning.filters import filter_nodes
-from mavac.cleaning.misses import HeapEvents, cause_counts, in_frustum, miss_causes
+from mavac.cleaning.heaps import DustField
+from mavac.cleaning.misses import HeapEvents, cause_counts, in_frustum, miss_causes, near_frustum
 from mavac.cleaning.timing import TrialTimes, base_path_length
 from mavac.cleaning.vacuum import spiral_path
 from mavac.params import ApproachParams, DetectionParams, DustParams, OnlineParams, VacuumParams
-from mavac.sim.render import intrinsics_from_fov
+from mavac.sim.render import intrinsics_from_fov, render_rgbd
+from mavac.sim.world import SimWorld
 
 
 def _image_with_two_blobs():
@@ -225,3 +227,70 @@ def test_vacuum_pattern_and_orders_are_checked_by_name():
         VacuumParams(spiral_nodes="first")
     with pytest.raises(ValueError, match="area_order"):
         ApproachParams(area_order="random")
+
+
+def _oblique_camera() -> np.ndarray:
+    """OpenCV camera 1 m above the floor at x = -0.6, looking down and forward (+x) at 50 deg."""
+    a = np.radians(50.0)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([[0.0, -1.0, 0.0], [-np.sin(a), 0.0, -np.cos(a)], [np.cos(a), 0.0, -np.sin(a)]])
+    T[:3, 3] = (-0.6, 0.0, 1.0)
+    return T
+
+
+def _render(world, T):
+    return render_rgbd(world.client, T, width=96, height=72, fov_y_deg=60, near=0.05, far=5.0)
+
+
+def _render_heaps(dust, world, T, where=None):
+    with dust.in_view(world, where) as bodies:
+        rgb, depth, seg = _render(world, T)
+    return rgb, depth, dust.index_of_bodies(seg, bodies).reshape(seg.shape), bodies
+
+
+def test_heaps_enter_the_world_only_to_be_rendered_and_culling_keeps_the_image():
+    rng = np.random.default_rng(4)
+    heaps = np.column_stack([rng.uniform(-2.0, 2.0, (1500, 2)), np.full(1500, 0.01)])
+    dust = DustField.of(heaps, DustParams())
+    T = _oblique_camera()
+    K = intrinsics_from_fov(96, 72, 60)
+    with SimWorld() as world:
+        floor = world.add_floor()
+        dust.suck(heaps[0], 1e-6)
+        rgb, depth, heap_of, bodies = _render_heaps(dust, world, T)
+        assert bodies[0] == -1 and np.count_nonzero(bodies >= 0) == 1499  # the vacuumed heap is not drawn
+        assert 0 not in heap_of and len(np.unique(heap_of)) > 10
+        assert set(np.unique(_render(world, T)[2])) <= {-1, floor}  # gone after the render
+        near = near_frustum(heaps, T, K, 96, 72, 0.05, 5.0, dust.radius + 0.05)
+        seen = in_frustum(heaps, T, K, 96, 72, 0.05, 5.0)
+        assert np.all(near[seen]) and near.sum() < 1000  # a superset of the frustum, not everything
+        culled = _render_heaps(dust, world, T, near)
+        for a, b in zip((rgb, depth, heap_of), culled[:3]):
+            np.testing.assert_array_equal(a, b)
+        # heaps centred just outside the frustum still show at the image's edges
+        assert not np.array_equal(heap_of, _render_heaps(dust, world, T, seen)[2])
+
+
+def test_suck_removes_each_heap_once():
+    dust = DustField.of(np.array([[0.0, 0.0, 0.0], [0.05, 0.0, 0.0], [1.0, 0.0, 0.0]]), DustParams())
+    assert dust.suck(np.array([0.01, 0.0, 0.0]), 0.03).tolist() == [0]
+    assert dust.suck(np.array([0.01, 0.0, 0.0]), 0.045).tolist() == [1]  # 0 is gone already
+    assert dust.suck(np.array([0.01, 0.0, 0.0]), 0.045).tolist() == []
+    assert dust.suck(np.array([1.0, 0.0, 0.02]), 0.03).tolist() == [2]
+    assert dust.cleaned.all() and dust.suck(np.zeros(3), 10.0).tolist() == []
+
+
+def test_suck_along_a_path_equals_testing_every_heap_at_every_step():
+    rng = np.random.default_rng(2)
+    heaps = rng.uniform(0.0, 0.5, (60, 3))
+    dust = DustField.of(heaps, DustParams())
+    present = np.ones(len(heaps), dtype=bool)
+    tip, got, expected = np.full(3, 0.25), [], []
+    for step in range(4000):
+        tip = np.clip(tip + rng.normal(0.0, 0.008, 3), 0.0, 0.5)
+        radius = 0.03 if step < 3000 else 0.05  # a new radius is tested afresh
+        got.append(dust.suck(tip, radius).tolist())
+        hit = np.flatnonzero(present & (np.linalg.norm(heaps - tip, axis=1) <= radius))  # the test it replaces
+        present[hit] = False
+        expected.append(hit.tolist())
+    assert got == expected and 10 < (~present).sum() < len(heaps)

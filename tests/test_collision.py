@@ -83,6 +83,7 @@ def test_batched_matches_single(ur10, box_at_tool):
     assert batched.shape == (30,) and batched.dtype == bool
     assert 0 < batched.sum() < 30
     assert [checker.in_collision(qi) for qi in q] == batched.tolist()
+    assert [checker.is_free(qi) for qi in q] == (~batched).tolist()
 
 
 def test_adjacent_links_are_not_paired(ur10):

@@ -93,3 +93,24 @@ def test_pd_torques_add_gravity(robot):
     q = robot.q_home
     tau = C.joint_pd_torques(robot.model, q, np.zeros(6), q + 0.1, np.zeros(6), kp=10.0, kd=1.0)
     np.testing.assert_allclose(tau - C.gravity_torques(robot.model, q), 1.0, atol=1e-9)
+
+
+def test_impedance_step_places_the_frame_itself(robot):
+    """One data through many random states: the law equals the one on fresh kinematics
+    (forwardKinematics + updateFramePlacements first), bit for bit."""
+    model, data, fresh = robot.model, robot.model.createData(), robot.model.createData()
+    fid = model.getFrameId("tool_tip")
+    rng = np.random.default_rng(5)
+    K, D = np.array([800.0] * 3 + [40.0] * 3), np.array([50.0] * 3 + [2.0] * 3)
+    for _ in range(50):
+        q, dq = rng.uniform(-3.0, 3.0, model.nq), rng.normal(size=model.nv)
+        target = np.eye(4)
+        target[:3, :3] = pin.rpy.rpyToMatrix(*rng.uniform(-1.0, 1.0, 3))
+        target[:3, 3] = rng.normal(size=3)
+        pin.forwardKinematics(model, fresh, q)
+        pin.updateFramePlacements(model, fresh)
+        J = pin.computeFrameJacobian(model, fresh, q, fid, pin.LOCAL_WORLD_ALIGNED)
+        M = fresh.oMf[fid]
+        error = np.concatenate([target[:3, 3] - M.translation, pin.log3(target[:3, :3] @ M.rotation.T)])
+        expected = J.T @ (K * error - D * (J @ dq)) + pin.computeGeneralizedGravity(model, fresh, q)
+        np.testing.assert_array_equal(C.impedance_step(model, data, q, dq, fid, target, K, D), expected)

@@ -5,9 +5,11 @@ import dataclasses
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial.transform import Rotation
 
+from mavac.geometry.transforms import transform_points
 from mavac.params import LissajousParams, ScrubModel
-from mavac.scrubbing.wear import (ScrubExperiment, lissajous_from_vector, measure_cp, removal_depth,
+from mavac.scrubbing.wear import (ContactWear, ScrubExperiment, lissajous_from_vector, measure_cp, removal_depth,
                              removal_from_vector, scrub_faces, stain_hardness, stain_opacity,
                              vector_from_lissajous)
 
@@ -117,3 +119,28 @@ def test_bad_inputs(stained_sphere):
             ScrubModel(**{field: 0.0})
     with pytest.raises(ValueError, match="face_noise"):
         ScrubModel(face_noise=-0.1)
+
+
+def test_contact_wear_of_many_steps_equals_one_step_at_a_time(stained_sphere):
+    mesh = stained_sphere[0]
+    rng = np.random.default_rng(7)
+    n = 200
+    world_T_part = np.tile(np.eye(4), (n, 1, 1))
+    world_T_part[:, :3, :3] = Rotation.from_rotvec(rng.normal(0.0, 0.3, (n, 3))).as_matrix()
+    world_T_part[:, :3, 3] = rng.normal(0.0, 0.02, (n, 3))
+    part_T_world = np.linalg.inv(world_T_part)
+    # contact centroids near the surface, many faces under the pad, overlapping from step to step
+    centres = np.einsum("nij,nj->ni", world_T_part[:, :3, :3], mesh.vertices[rng.integers(0, len(mesh.vertices), n)])
+    centres += world_T_part[:, :3, 3]
+    pressure, sliding = rng.uniform(1e3, 5e4, n), rng.uniform(0.0, 1e-3, n)
+    wear = ContactWear(mesh, 0.03, 2e-4)
+    wear.add_steps(part_T_world, centres, pressure, sliding)
+    # the loop it replaces: each step's faces within the pad of its centroid (part frame)
+    expected = np.zeros(len(mesh.faces))
+    for T, c, p, s in zip(part_T_world, centres, pressure, sliding):
+        faces = wear.tree.query_ball_point(transform_points(T, c[None])[0], 0.03)
+        expected[faces] += 2e-4 * p * s
+    assert np.count_nonzero(expected) > 20
+    np.testing.assert_array_equal(wear.removal, expected)
+    wear.add_steps(np.zeros((0, 4, 4)), np.zeros((0, 3)), [], [])
+    np.testing.assert_array_equal(wear.removal, expected)

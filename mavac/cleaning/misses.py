@@ -84,3 +84,20 @@ def in_frustum(points, world_T_camera, K, width: int, height: int, near: float, 
         u = K[0, 0] * c[:, 0] / z + K[0, 2]
         v = K[1, 1] * c[:, 1] / z + K[1, 2]
     return (z > near) & (z < far) & (u >= -0.5) & (u <= width - 0.5) & (v >= -0.5) & (v <= height - 0.5)
+
+
+def near_frustum(points, world_T_camera, K, width: int, height: int, near: float, far: float,
+                 margin: float) -> np.ndarray:
+    """(n,) bool: world points within ``margin`` (m) of the view frustum of :func:`in_frustum`
+    (a superset of it: spheres of radius below ``margin`` that show in the image are centred on
+    such points)."""
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    T = np.asarray(world_T_camera, dtype=float)
+    x, y, z = ((P - T[:3, 3]) @ T[:3, :3]).T
+    ok = (z > near - margin) & (z < far + margin)
+    # each side plane passes through the optical centre: x - a z >= 0 inside, a = tan of its angle
+    for coord, lo, hi, f, c in ((x, -0.5, width - 0.5, K[0, 0], K[0, 2]), (y, -0.5, height - 0.5, K[1, 1], K[1, 2])):
+        a, b = (lo - c) / f, (hi - c) / f
+        ok &= (coord - a * z) / np.hypot(1.0, a) >= -margin
+        ok &= (b * z - coord) / np.hypot(1.0, b) >= -margin
+    return ok

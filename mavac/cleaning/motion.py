@@ -79,7 +79,7 @@ def plan_arm_motion(robot, checker, q_start, q_goal, params: ApproachParams, *, 
     if np.allclose(qs, qg, atol=1e-9):
         return Motion(np.vstack([qs, qg]), True, "same configuration", 0.0)
     lo, hi = planning_box(robot, qs, qg)
-    result = plan_rrt_connect(lambda q: not checker.in_collision(q), qs, qg, lo, hi,
+    result = plan_rrt_connect(checker.is_free, qs, qg, lo, hi,
                               time_limit=params.rrt_time_limit * budget_factor, seed=int(seed),
                               resolution=params.rrt_resolution,
                               max_iterations=params.rrt_max_iterations * budget_factor)

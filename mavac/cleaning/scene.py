@@ -76,10 +76,11 @@ class Cell:
 
 
 def build_cell(world, machine: Machine, robot, heaps, params: OnlineParams, world_T_base) -> Cell:
-    """Floor, machine (static concave mesh), heaps and the robot at ``world_T_base`` in ``q_home``."""
+    """Floor, machine (static concave mesh) and the robot at ``world_T_base`` in ``q_home``; the
+    heaps (:class:`mavac.cleaning.heaps.DustField`) enter the world only to be rendered."""
     world.add_floor()
     machine_body = world.add_static_mesh(machine.mesh.vertices, machine.mesh.faces, rgba=MACHINE_RGBA)
-    dust = DustField.add_to(world, heaps, params.dust)
+    dust = DustField.of(heaps, params.dust)
     names = [robot.model.names[j] for j in range(1, robot.model.njoints)]
     sim = world.add_robot(robot_urdf(robot), world_T_base=world_T_base, joint_names=names)
     sim.reset_q(robot.q_home)

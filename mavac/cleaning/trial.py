@@ -45,7 +45,7 @@ from .clustering import areas_from_nodes
 from .detection import detect_dust, match_nodes
 from .filters import FILTERS, filter_nodes
 from .heaps import heaps_for_trial
-from .misses import CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes
+from .misses import CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes, near_frustum
 from .motion import Motion, plan_arm_motion
 from .scene import build_cell
 from .timing import TrialTimes, base_path_length
@@ -54,6 +54,10 @@ from .vacuum import vacuum_area
 #: Ours: render clipping planes, m (the Kinect body around the camera origin is nearer than
 #: ``NEAR``; the depth filter, not the far plane, bounds detection).
 NEAR, FAR = 0.05, 5.0
+#: Ours: only heaps whose sphere comes within this distance (m) of the view frustum enter the
+#: world to be rendered (the others cannot show in the image; the slack covers any difference
+#: between the renderer's projection and ``K``).
+VIEW_MARGIN = 0.05
 
 
 @dataclass
@@ -265,12 +269,15 @@ class _Run:
         """RGB-D image from the camera where the arm really is; marks frustum/image ground truth."""
         d, cell = self.params.detection, self.cell
         world_T_camera = cell.sim.world_T_link(cell.robot.camera_frame) @ mavac_T_opencv()
-        rgb, depth, seg = render_rgbd(cell.world.client, world_T_camera, width=d.width, height=d.height,
-                                      fov_y_deg=self.fov_y, near=NEAR, far=FAR)
+        shown = near_frustum(cell.dust.positions, world_T_camera, self.K, d.width, d.height, NEAR, FAR,
+                             cell.dust.radius + VIEW_MARGIN)
+        with cell.dust.in_view(cell.world, shown) as bodies:
+            rgb, depth, seg = render_rgbd(cell.world.client, world_T_camera, width=d.width, height=d.height,
+                                          fov_y_deg=self.fov_y, near=NEAR, far=FAR)
         present = np.flatnonzero(cell.dust.present)
         self.events.mark("in_frustum", present[in_frustum(cell.dust.positions[present], world_T_camera, self.K,
                                                           d.width, d.height, NEAR, FAR)])
-        self.events.mark("in_image", cell.dust.index_of_bodies(np.unique(seg)))
+        self.events.mark("in_image", cell.dust.index_of_bodies(np.unique(seg), bodies))
         return rgb, depth, world_T_camera
 
     def inspect_and_clean(self, i: int, pose) -> None:

@@ -21,6 +21,7 @@ text ("a linear movement") does not have.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -105,27 +106,31 @@ def _follow(cell, world_T_ref, waypoints, n_settle: int, params: VacuumParams, l
     """Impedance-track the tool centre through ``waypoints`` (m, 3), one per physics step, with
     the orientation of ``world_T_ref``, then hold the last one for up to ``n_settle`` steps;
     sucks heaps on the way. Returns the closest approach to the last waypoint, m."""
-    dt = cell.world.time_step
+    sim, world, dust = cell.sim, cell.world, cell.dust
     K, D = _gains(params)
     base_T_world = np.linalg.inv(cell.world_T_base)
     target = np.array(world_T_ref, dtype=float)
     goal = waypoints[-1]
     peak, closest, n_move = 0.0, np.inf, len(waypoints)
     for k in range(n_move + n_settle):
-        target[:3, 3] = waypoints[min(k, n_move - 1)]
-        q, dq = cell.sim.state()
-        cell.sim.apply_torques_unchecked(impedance_step(cell.model, cell.data, q, dq, cell.tool_id,
-                                                        base_T_world @ target, K, D))
-        cell.world.step_once()
-        tip = cell.sim.link_position(cell.tool_frame)
-        log.sucked += cell.dust.suck(cell.world, tip, params.suction_radius).tolist()
-        peak = max(peak, cell.world.contact_forces(cell.sim.body, cell.machine_body).normal_force)
-        gap = float(np.linalg.norm(tip - goal))
+        if k < n_move:  # the settling steps hold the last target
+            target[:3, 3] = waypoints[k]
+            base_T_target = base_T_world @ target
+        q, dq = sim.state()
+        sim.apply_torques_unchecked(impedance_step(cell.model, cell.data, q, dq, cell.tool_id, base_T_target, K, D))
+        world.step_once()
+        tip = sim.link_position(cell.tool_frame)
+        hit = dust.suck(tip, params.suction_radius)
+        if len(hit):
+            log.sucked += hit.tolist()
+        peak = max(peak, world.normal_force(sim.body, cell.machine_body))
+        d = tip - goal
+        gap = math.sqrt(d.dot(d))  # numpy's norm of a vector, without its overhead
         closest = min(closest, gap)
         if k >= n_move and (gap <= params.settle_tol or np.abs(dq).max() < SETTLED_JOINT_SPEED):
             break
     log.peak_forces.append(peak)
-    log.seconds += (k + 1) * dt
+    log.seconds += (k + 1) * world.time_step
     return closest
 
 

@@ -85,10 +85,50 @@ def holder_ik(holder, world_T_parts, params: BimanualCellParams = BimanualCellPa
     return ik(holder, targets, frame="flange", q0=HOLDER_SEED if q0 is None else q0)
 
 
+class ArmClearance:
+    """Whether the part, held at a pose, stays clear of the holding arm and of the cleaning arm
+    parked at :data:`CLEANER_PARK` (coal, ``params.part_clearance`` margin).
+
+    The two collision checkers (one BVH of the part, in the part frame; each pose moves the
+    arms' bases around it) are built once here: building them costs ~50 ms, as much as a few
+    hundred poses' tests, and a setup plan tests the same part hundreds of times.
+
+    Parameters
+    ----------
+    cleaner, holder : RobotModel
+        From :func:`cell_robots`.
+    part_mesh : trimesh.Trimesh
+        Part frame, metres.
+    params : BimanualCellParams
+    """
+
+    def __init__(self, cleaner, holder, part_mesh: trimesh.Trimesh,
+                 params: BimanualCellParams = BimanualCellParams()):
+        check_mesh("part_mesh", part_mesh)
+        self.holder, self.params = holder, check_instance("params", params, BimanualCellParams)
+        # The part touches the holding flange's adapter by construction; the links up to the
+        # wrist (joints 1-5) must stay clear of it.
+        self.hold = CollisionChecker(_links_up_to(holder, 5), part_mesh, margin=params.part_clearance)
+        self.clean = CollisionChecker(cleaner, part_mesh, margin=params.part_clearance)
+
+    def __call__(self, world_T_parts, q_holder) -> np.ndarray:
+        """(k,) bool for the part at ``world_T_parts`` (k, 4, 4) held at ``q_holder`` (k, 7), rad."""
+        T = check_transforms("world_T_parts", world_T_parts)
+        q_holder = np.asarray(q_holder, dtype=float).reshape(len(T), self.holder.nq)
+        out = np.ones(len(T), dtype=bool)
+        for j, (Tj, qj) in enumerate(zip(T, q_holder)):
+            part_T_world = np.linalg.inv(Tj)
+            self.hold.set_base(part_T_world @ self.params.world_T_holder)
+            self.clean.set_base(part_T_world @ self.params.world_T_cleaner)
+            out[j] = not self.hold.in_collision(qj) and not self.clean.in_collision(CLEANER_PARK)
+        return out
+
+
 def part_clear_of_arms(cleaner, holder, part_mesh: trimesh.Trimesh, world_T_parts, q_holder,
                        params: BimanualCellParams = BimanualCellParams()) -> np.ndarray:
     """Whether the part, held at each pose, stays clear of the holding arm (at ``q_holder``) and
-    of the cleaning arm parked at :data:`CLEANER_PARK` (coal, ``params.part_clearance`` margin).
+    of the cleaning arm parked at :data:`CLEANER_PARK` (:class:`ArmClearance`, built for this
+    one call).
 
     A part too large to fit between the arms at a pose fails here.
 
@@ -103,21 +143,7 @@ def part_clear_of_arms(cleaner, holder, part_mesh: trimesh.Trimesh, world_T_part
     -------
     (k,) bool
     """
-    check_mesh("part_mesh", part_mesh)
-    T = check_transforms("world_T_parts", world_T_parts)
-    q_holder = np.asarray(q_holder, dtype=float).reshape(len(T), holder.nq)
-    out = np.ones(len(T), dtype=bool)
-    # The part touches the holding flange's adapter by construction; the links up to the
-    # wrist (joints 1-5) must stay clear of it.
-    # One BVH of the part (in the part frame); each pose moves the arms' bases around it.
-    hold = CollisionChecker(_links_up_to(holder, 5), part_mesh, margin=params.part_clearance)
-    clean = CollisionChecker(cleaner, part_mesh, margin=params.part_clearance)
-    for j, (Tj, qj) in enumerate(zip(T, q_holder)):
-        part_T_world = np.linalg.inv(Tj)
-        hold.set_base(part_T_world @ params.world_T_holder)
-        clean.set_base(part_T_world @ params.world_T_cleaner)
-        out[j] = not hold.in_collision(qj) and not clean.in_collision(CLEANER_PARK)
-    return out
+    return ArmClearance(cleaner, holder, part_mesh, params)(world_T_parts, q_holder)
 
 
 def _links_up_to(robot, last_joint: int):

@@ -20,7 +20,7 @@ from ..params import BimanualCellParams, ReachParams, SetupPlanParams
 from ..setups.reach import base_T_part
 from ..setups.setup_plan import SetupPlan, plan_setups
 from ..validate import check_instance, check_points
-from .cell import holder_ik, part_clear_of_arms
+from .cell import ArmClearance, holder_ik
 
 
 class HeldSetups:
@@ -47,6 +47,7 @@ class HeldSetups:
         self.params = check_instance("params", params, BimanualCellParams)
         self.unreachable = 0
         self.collides = 0
+        self._clearance = None  # built on first use (setup_configurations never needs it)
 
     def holder_q(self, setups) -> tuple[np.ndarray, np.ndarray]:
         """Holding arm configurations ``(k, 7)`` for the setups and which exist ``(k,)``."""
@@ -60,7 +61,9 @@ class HeldSetups:
         self.unreachable += int((~ok).sum())
         if ok.any():
             T = base_T_part(setups[ok], self.params.space)
-            clear = part_clear_of_arms(self.cleaner, self.holder, self.part_mesh, T, q[ok], self.params)
+            if self._clearance is None:
+                self._clearance = ArmClearance(self.cleaner, self.holder, self.part_mesh, self.params)
+            clear = self._clearance(T, q[ok])
             self.collides += int((~clear).sum())
             ok[np.flatnonzero(ok)[~clear]] = False
         return ok

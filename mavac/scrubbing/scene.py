@@ -52,6 +52,8 @@ class TwoArmCell:
     pad_link: int
     pad_area: float
     log: dict = field(default_factory=dict)
+    #: the holding arm's setup-motion checker (:func:`setup_motion_checker`), built on first use
+    setup_checker: CollisionChecker | None = None
 
 
 def holder_dynamics_model(holder_model, params: BimanualCellParams) -> pin.Model:
@@ -141,6 +143,21 @@ def _holder_with_part(holder_model, part_mesh, params):
     return replace(holder_model, collision_model=gm)
 
 
+def setup_motion_checker(cell: TwoArmCell) -> CollisionChecker:
+    """The holding arm carrying the part against the parked cleaning arm's box and the floor,
+    self-collision included; built once per cell (the part, the arms and the box never change)."""
+    if cell.setup_checker is None:
+        params = cell.params
+        robot = _holder_with_part(cell.holder_model, cell.part_mesh, params)
+        checker = CollisionChecker(robot, parked_cleaner_box(cell.cleaner_model, params),
+                                   world_T_base=params.world_T_holder, floor=True)
+        # the part sits on the flange and link 7 by construction: those pairs are not collisions
+        names = [g.name for g in robot.collision_model.geometryObjects]
+        checker.ignore_pairs(("held_part", b) for b in names if b.startswith(("lbr_iiwa_link_7", "flange")))
+        cell.setup_checker = checker
+    return cell.setup_checker
+
+
 def setup_motion_path(cell: TwoArmCell, q_goal, *, seed: int = 0):
     """Collision-free joint path of the holding arm (with the part) to ``q_goal``: RRT-Connect
     against the parked cleaning arm's box and the floor, self-collision included, within
@@ -151,13 +168,7 @@ def setup_motion_path(cell: TwoArmCell, q_goal, *, seed: int = 0):
     (k, 7) float path, or raises ``RuntimeError`` with OMPL's reason.
     """
     params = cell.params
-    robot = _holder_with_part(cell.holder_model, cell.part_mesh, params)
-    checker = CollisionChecker(robot, parked_cleaner_box(cell.cleaner_model, params),
-                               world_T_base=params.world_T_holder, floor=True)
-    # the part sits on the flange and link 7 by construction: those pairs are not collisions
-    names = [g.name for g in robot.collision_model.geometryObjects]
-    checker.ignore_pairs(("held_part", b) for b in names if b.startswith(("lbr_iiwa_link_7", "flange")))
-    res = plan_rrt_connect(lambda q: not checker.in_collision(q), cell.holder.q(), np.asarray(q_goal, float),
+    res = plan_rrt_connect(setup_motion_checker(cell).is_free, cell.holder.q(), np.asarray(q_goal, float),
                            cell.holder_model.q_lower, cell.holder_model.q_upper, seed=seed,
                            max_iterations=params.setup_rrt_iterations, time_limit=params.setup_rrt_time_limit)
     if not res.solved:

@@ -27,6 +27,7 @@ from ..geometry.parts import Part
 from ..params import BimanualCellParams, LissajousParams, ToolpathParams
 from ..robots.kinematics import ik_axis
 from ..sim.control import gravity_torques
+from ..sim.world import transforms_from_poses
 from ..validate import check_array, check_instance
 from .cell import CLEANER_PARK
 from .lissajous import overlay_path
@@ -149,7 +150,7 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
     check_instance("schedule", schedule, Schedule)
     c = cell.cleaner
     robot = cell.cleaner_model.model
-    data = robot.createData()
+    data, gravity_data = robot.createData(), robot.createData()
     fid = robot.getFrameId(cell.cleaner_model.tool_frame)
     dt = cell.world.time_step
     gains = Gains.of(cell.params, stiffness)
@@ -159,9 +160,9 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
     m = len(schedule.positions)
     force, touch, pads = np.zeros(m), np.zeros(m, dtype=bool), np.zeros((m, 3))
     state = {"integral": 0.0, "sliding": 0.0}
-    kept = []
+    kept, contacts = [], []
     for i in range(m):
-        q, dq = c.q(), c.dq()
+        q, dq = c.state()
         if i % REPLAY_EVERY == 0:
             kept.append(q)
         pin.computeJointJacobians(robot, data, q)
@@ -169,12 +170,14 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
         J = pin.getFrameJacobian(robot, data, fid, pin.LOCAL_WORLD_ALIGNED)
         T = data.oMf[fid]
         tau = _scrub_torques(robot, q, dq, J, T, schedule, i, gains, state, force[i - 1] if i else 0.0, dt)
-        c.apply_torques(tau)
-        cell.world.step()
+        # gravity last, as the law's sum always had it; one pinocchio data for the whole loop
+        c.apply_torques_unchecked(tau + np.array(pin.computeGeneralizedGravity(robot, gravity_data, q)))
+        cell.world.step_once()
         summary = cell.world.contact_forces(c.body, cell.part, link_a=cell.pad_link)
         force[i], touch[i], pads[i] = summary.normal_force, summary.count > 0, T.translation
         if touch[i]:
-            _measure_wear(cell, wear, summary, J @ dq, state, dt)
+            contacts.append(_contact_step(cell, summary, J @ dq, state, dt))
+    _add_wear(wear, contacts)
     return ScrubLog(np.arange(1, m + 1) * dt, force, touch, np.asarray(schedule.contact, bool), pads,
                     wear.removal, state["sliding"], np.array(kept))
 
@@ -216,8 +219,8 @@ class Gains(NamedTuple):
 
 
 def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) -> np.ndarray:
-    """Hybrid impedance/force law at sample ``i`` (tool-frame gains), plus gravity and a
-    null-space pull towards the previous posture (the iiwa is redundant)."""
+    """Hybrid impedance/force law at sample ``i`` (tool-frame gains), plus a null-space pull
+    towards the previous posture (the iiwa is redundant); the caller adds gravity."""
     R = schedule.rotations[i]
     e_t = R.T @ (schedule.positions[i] - T.translation)
     v = J @ dq
@@ -239,21 +242,32 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
     null = np.eye(len(q)) - J.T @ J_pinv.T
     q_rest = state.setdefault("q_rest", q.copy())
     tau_null = null @ (g.kn * (q_rest - q) - g.dn * dq)
-    return J.T @ wrench + tau_null + gravity_torques(robot, q)
+    return J.T @ wrench + tau_null
 
 
-def _measure_wear(cell, wear, summary, pad_twist, state, dt) -> None:
-    """Preston increment of the faces under the pad from this step's measured contact."""
+def _contact_step(cell, summary, pad_twist, state, dt) -> tuple:
+    """This step's measured contact: adds its sliding (m) to ``state``; returns what the wear
+    needs, ``(part position (3,), part xyzw quaternion (4,), contact centroid (3,), pressure
+    (Pa), sliding (m))``, applied for all steps at once by :func:`_add_wear`."""
     lin, ang = cell.world.body_velocity(cell.part)
-    world_T_p = cell.world.body_pose(cell.part)
+    position, quaternion = cell.world.body_position(cell.part)
     centre = summary.positions.mean(axis=0)
-    v_part = np.asarray(lin) + np.cross(ang, centre - world_T_p[:3, 3])
+    v_part = lin + np.cross(ang, centre - position)
     v_rel = pad_twist[:3] - v_part
     n = summary.normals.mean(axis=0)
     n = n / max(np.linalg.norm(n), 1e-12)
     sliding = float(np.linalg.norm(v_rel - (v_rel @ n) * n)) * dt
     state["sliding"] += sliding
-    wear.add(np.linalg.inv(world_T_p), summary.positions, summary.normal_force / cell.pad_area, sliding)
+    return position, quaternion, centre, summary.normal_force / cell.pad_area, sliding
+
+
+def _add_wear(wear: ContactWear, contacts: list) -> None:
+    """Preston removal of the faces under the pad for every contact step (:func:`_contact_step`)."""
+    if not contacts:
+        return
+    position, quaternion, centre, pressure, sliding = (np.array(c) for c in zip(*contacts))
+    world_T_part = transforms_from_poses(position, quaternion)
+    wear.add_steps(np.linalg.inv(world_T_part), centre, pressure, sliding)
 
 
 # ---------------------------------------------------------------- schedules

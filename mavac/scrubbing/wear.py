@@ -36,13 +36,13 @@ masks -> C_p.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 import trimesh
 
 from ..geometry.mesh import check_mesh
-from ..geometry.transforms import transform_points
 from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
 from ..validate import check_array, check_instance, check_int, check_points, check_positive
 from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
@@ -337,9 +337,25 @@ class ContactWear:
         self.preston = float(check_positive("preston", preston))
         self.removal = np.zeros(len(self.centres))
 
-    def add(self, part_T_world, contact_points, pressure: float, sliding: float) -> None:
-        """One step: contact points (k, 3) world, ``pressure`` Pa, ``sliding`` m."""
-        centre = transform_points(part_T_world, contact_points.mean(axis=0, keepdims=True))[0]
-        faces = self.tree.query_ball_point(centre, self.radius)
-        if faces:
-            self.removal[faces] += self.preston * pressure * sliding
+    def add_steps(self, part_T_world, centres, pressure, sliding) -> None:
+        """Steps of contact, in order, at once.
+
+        Parameters
+        ----------
+        part_T_world : (n, 4, 4) float
+            Pose of the world in the part frame at each step.
+        centres : (n, 3) float, m
+            Contact centroid of each step, world frame.
+        pressure : (n,) float, Pa
+        sliding : (n,) float, m
+
+        The sums equal those of one step at a time: each face's increments are added in step
+        order (``numpy.add.at``).
+        """
+        T = np.asarray(part_T_world, dtype=float).reshape(-1, 4, 4)
+        c = (np.asarray(centres, dtype=float).reshape(-1, 1, 3) @ T[:, :3, :3].transpose(0, 2, 1))[:, 0] + T[:, :3, 3]
+        faces = self.tree.query_ball_point(c, self.radius) if len(c) else []
+        counts = np.array([len(f) for f in faces], dtype=np.intp)
+        index = np.fromiter(itertools.chain.from_iterable(faces), dtype=np.intp, count=int(counts.sum()))
+        step = self.preston * np.asarray(pressure, dtype=float) * np.asarray(sliding, dtype=float)
+        np.add.at(self.removal, index, np.repeat(step, counts))

@@ -108,9 +108,10 @@ def cartesian_impedance_torques(model, data, q, dq, frame_id, world_T_target, *,
 
 
 def impedance_step(model, data, q, dq, frame_id: int, world_T_target, K, D, wrench_ff=None) -> np.ndarray:
-    """:func:`cartesian_impedance_torques` without input checks, for control loops."""
-    pin.forwardKinematics(model, data, q)
-    pin.updateFramePlacements(model, data)
+    """:func:`cartesian_impedance_torques` without input checks, for control loops (only
+    ``data.oMf[frame_id]`` is updated among the frame placements)."""
+    # computeFrameJacobian places the joints of the frame's chain and the frame itself, by the
+    # same products as forwardKinematics + updateFramePlacements (bit for bit)
     J = pin.computeFrameJacobian(model, data, q, frame_id, pin.LOCAL_WORLD_ALIGNED)
     M = data.oMf[frame_id]
     error = np.concatenate([world_T_target[:3, 3] - M.translation, pin.log3(world_T_target[:3, :3] @ M.rotation.T)])

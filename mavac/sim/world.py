@@ -67,6 +67,19 @@ def _matrix_from_pose(position, quaternion) -> np.ndarray:
     return T
 
 
+def transforms_from_poses(positions, quaternions) -> np.ndarray:
+    """(n, 4, 4) rigid transforms of ``positions`` (n, 3) and xyzw ``quaternions`` (n, 4), as
+    pybullet gives them (each equal to :meth:`SimWorld.body_pose`'s matrix of that pose)."""
+    from scipy.spatial.transform import Rotation
+
+    P = np.asarray(positions, dtype=float).reshape(-1, 3)
+    T = np.tile(np.eye(4), (len(P), 1, 1))
+    if len(P):
+        T[:, :3, :3] = Rotation.from_quat(np.asarray(quaternions, dtype=float).reshape(-1, 4)).as_matrix()
+    T[:, :3, 3] = P
+    return T
+
+
 def _check_rgba(rgba) -> list:
     a = check_array("rgba", rgba, float).reshape(-1)
     if a.shape != (4,) or np.any(a < 0) or np.any(a > 1):
@@ -271,11 +284,23 @@ class SimWorld:
         return ContactSummary(float(forces.sum()), len(points), np.array([c[5] for c in points], dtype=float),
                               np.array([c[7] for c in points], dtype=float))
 
+    def normal_force(self, body_a: int, body_b: int) -> float:
+        """:attr:`ContactSummary.normal_force` of :meth:`contact_forces` (N), without the
+        summary's arrays and the checks (control loops)."""
+        points = self._p.getContactPoints(bodyA=body_a, bodyB=body_b, physicsClientId=self.client)
+        return float(np.array([c[9] for c in points], dtype=float).sum()) if points else 0.0
+
     def body_pose(self, body: int) -> np.ndarray:
         """(4, 4) ``world_T_body`` of a body's base."""
         self._check_open()
         pos, quat = self._p.getBasePositionAndOrientation(int(body), physicsClientId=self.client)
         return _matrix_from_pose(pos, quat)
+
+    def body_position(self, body: int) -> tuple[np.ndarray, np.ndarray]:
+        """Position (3,) m and xyzw quaternion (4,) of a body's base, world frame (the pose of
+        :meth:`body_pose` without the matrix: :func:`transforms_from_poses` makes many at once)."""
+        pos, quat = self._p.getBasePositionAndOrientation(int(body), physicsClientId=self.client)
+        return np.asarray(pos, dtype=float), np.asarray(quat, dtype=float)
 
     def body_velocity(self, body: int) -> tuple[np.ndarray, np.ndarray]:
         """Linear (3,) m/s and angular (3,) rad/s velocity of a body's base, world frame."""
