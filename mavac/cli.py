@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import re
 import sys
 import time
@@ -20,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .config import user_output_dir
+from .config import cache_dir, user_output_dir
+from .io import atomic_paths
 
 UNITS_HELP = ("unit of the coordinates in the file: m, cm, mm or in (default: the unit a COLLADA file "
               "declares, metres for STL/OBJ/PLY)")
@@ -45,11 +47,49 @@ def _next(bar, label: str):
     bar.set_description_str(label)
 
 
-def _default(path, stem: str, suffix: str, beside=None) -> Path:
-    """The path asked for, else ``<stem><suffix>`` beside ``beside`` or in the user's output folder."""
-    if path:
-        return Path(path)
-    return (Path(beside).parent if beside else user_output_dir()) / f"{stem}{suffix}"
+def _checked_output(flag: str, path: Path) -> Path:
+    """``path`` if a file can be written there, else ValueError naming ``flag`` (before any work)."""
+    if path.is_dir():
+        raise ValueError(f"{flag} {path} is a directory; give a file name, e.g. {path / 'result.html'}")
+    folder = path.absolute().parent
+    while not folder.exists():  # atomic writes create the missing folders
+        folder = folder.parent
+    if not folder.is_dir():
+        raise ValueError(f"{flag} {path}: {folder} is a file, not a directory")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{flag} {path}: cannot write into {folder} (read-only)")
+    return path
+
+
+def _outputs(args, source: str, stem: str, companion: str) -> tuple[Path, Path]:
+    """The HTML page and its ``.json`` or ``.csv`` companion, checked before any work.
+
+    The page defaults to ``<stem>.html`` in the user's output folder; the companion to the page's
+    name with its own suffix. Neither may be the input, nor both the same file.
+    """
+    cache_dir()  # refuses a MAVAC_CACHE that names a file, now rather than after the work
+    paths = {}
+    for flag, value, default in (("--out", args.out, None), (f"--{companion}", getattr(args, companion), companion)):
+        if value is not None and not value.strip():
+            raise ValueError(f"{flag} is empty; give a file name")
+        if value is not None:
+            paths[flag] = Path(value).expanduser()
+        else:
+            paths[flag] = paths["--out"].with_suffix(f".{default}") if default else user_output_dir() / f"{stem}.html"
+        if paths[flag].resolve() == Path(source).resolve():
+            raise ValueError(f"{flag} {value} is the input mesh; give another file name")
+        _checked_output(flag, paths[flag])
+    out, other = paths.values()
+    if out.resolve() == other.resolve():
+        raise ValueError(f"both --out and --{companion} name {out}; give two different files")
+    return out, other
+
+
+#: ``--up`` -> rotation turning that axis of the file onto +z (signed permutations: exact)
+UP_TURNS = {"x": [[0, 0, -1], [0, 1, 0], [1, 0, 0]], "-x": [[0, 0, 1], [0, 1, 0], [-1, 0, 0]],
+            "y": [[1, 0, 0], [0, 0, -1], [0, 1, 0]], "-y": [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
+            "z": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "-z": [[1, 0, 0], [0, -1, 0], [0, 0, -1]]}
+UP_CHOICES = ("+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z")
 
 
 def _load(path, units, role, up):
@@ -59,8 +99,10 @@ def _load(path, units, role, up):
         mesh = load_mesh(path, units=units, role=role)
     except ValueError as exc:  # name the flag, not the keyword argument
         raise ValueError(re.sub(r"units='(\w+)'", r"--units \1", str(exc))) from None
-    if up == "y":  # y-up export (many COLLADA/OBJ files): turn y onto z
-        mesh.apply_transform(np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]]))
+    turn = np.eye(4)
+    turn[:3, :3] = UP_TURNS[up.lstrip("+")]
+    if up.lstrip("+") != "z":  # e.g. a y-up export (many COLLADA/OBJ files)
+        mesh.apply_transform(turn)
     return mesh
 
 
@@ -73,9 +115,11 @@ def _inspection_params(args):
         params = fast_params()
     else:
         params = InspectionParams()
-    spot = dataclasses.replace(params.spot, P_s=args.P_s)
-    guard = dataclasses.replace(params.guard, P_g=args.P_g)
-    nos = dataclasses.replace(params.nos, enabled=not args.no_nos)
+    if args.hpr_radius is not None and args.visibility != "hpr":
+        raise ValueError("--hpr-radius applies only with --visibility hpr")
+    spot = dataclasses.replace(params.spot, P_s=getattr(args, "P_s", params.spot.P_s))  # inspect only
+    guard = dataclasses.replace(params.guard, P_g=getattr(args, "P_g", params.guard.P_g))
+    nos = dataclasses.replace(params.nos, enabled=not getattr(args, "no_nos", False))
     visibility = dataclasses.replace(params.visibility, method=args.visibility, radius=args.hpr_radius)
     spacing = params.surface_spacing if args.spacing is None else args.spacing
     return dataclasses.replace(params, surface_spacing=spacing, seed=args.seed, spot=spot, guard=guard, nos=nos,
@@ -88,8 +132,7 @@ def cmd_inspect(args) -> int:
     from .inspection.inspection_plan import plan_from_context, prepare_offline, warn_low_coverage
 
     stem = Path(args.mesh).stem
-    out = _default(args.out, stem, "_plan.html")
-    js = _default(args.json, stem, "_plan.json", beside=out)
+    out, js = _outputs(args, args.mesh, f"{stem}_plan", "json")
     params = _inspection_params(args)
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "surface, map, spots", "guards and NoS guards", "writing"], args.quiet)
@@ -101,8 +144,9 @@ def cmd_inspect(args) -> int:
         plan = plan_from_context(ctx, progress=_bars(args))
         warn_low_coverage(ctx, plan)
         _next(bar, "writing")
-        plan.to_json(js)
-        plan.to_html(out)
+        with atomic_paths(out, js) as (tmp_out, tmp_js):
+            plan.to_json(tmp_js)
+            plan.to_html(tmp_out)
         _next(bar, "done")
     print(plan.summary())
     print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
@@ -130,8 +174,7 @@ def cmd_setups(args) -> int:
     from .setups.setup_plan import plan_setups
 
     stem = Path(args.part).stem
-    out = _default(args.out, stem, "_setups.html")
-    js = _default(args.json, stem, "_setups.json", beside=out)
+    out, js = _outputs(args, args.part, f"{stem}_setups", "json")
     params = SetupPlanParams(seed=args.seed, method=args.method,
                              planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
     t0 = time.perf_counter()
@@ -144,8 +187,9 @@ def cmd_setups(args) -> int:
         _next(bar, "reach test and planning")
         plan = plan_setups(part, params=params)
         _next(bar, "writing")
-        plan.to_json(js)
-        plan.to_html(out, part, params=params)
+        with atomic_paths(out, js) as (tmp_out, tmp_js):
+            plan.to_json(tmp_js)
+            plan.to_html(tmp_out, part, params=params)
         _next(bar, "done")
     print(f"{stem}: stain of {len(part.stain_faces)} patches, {part.patch_areas.sum() * 1e4:.1f} cm^2, "
           f"passes {np.bincount(part.passes, minlength=4)[1:].tolist()} (1/2/3)")
@@ -160,8 +204,7 @@ def cmd_reach(args) -> int:
     from .inspection.reach_study import reach_study
 
     stem = Path(args.mesh).stem
-    out = _default(args.out, stem, "_reach.html")
-    csv = _default(args.csv, stem, "_reach.csv", beside=out)
+    out, csv = _outputs(args, args.mesh, f"{stem}_reach", "csv")
     params = _inspection_params(args)
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "reach study", "writing"], args.quiet)
@@ -170,8 +213,9 @@ def cmd_reach(args) -> int:
         _next(bar, "reach study")
         study = reach_study(machine, params=params, progress=_bars(args))
         _next(bar, "writing")
-        study.to_csv(csv)
-        study.to_html(out)
+        with atomic_paths(out, csv) as (tmp_out, tmp_csv):
+            study.to_csv(tmp_csv)
+            study.to_html(tmp_out)
         _next(bar, "done")
     print(study.summary())
     print(f"wrote {out} and {csv} in {time.perf_counter() - t0:.1f} s")
@@ -180,8 +224,8 @@ def cmd_reach(args) -> int:
 
 def _common(p: argparse.ArgumentParser, *, role: str) -> None:
     p.add_argument("--units", choices=("m", "cm", "mm", "in"), default=None, help=UNITS_HELP)
-    p.add_argument("--up", choices=("z", "y"), default="z",
-                   help="which axis of the file points up (y: turned so that it becomes z)")
+    p.add_argument("--up", choices=UP_CHOICES, default="z", metavar="{+x,-x,+y,-y,+z,-z}",
+                   help="which axis of the file points up (x = +x; the mesh is turned so that it becomes +z)")
     p.add_argument("--seed", type=int, default=0, help="seed of every random choice (same seed, same result)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(role=role)
@@ -195,13 +239,17 @@ def _machine_options(p: argparse.ArgumentParser) -> None:
                    help="HPR radius in metres for every viewpoint (default: a factor of the farthest point distance)")
     p.add_argument("--spacing", type=float, default=None,
                    help="distance between surface elements of S, metres (default 0.05; 0.10 with --fast)")
+    p.add_argument("--fast", action="store_true",
+                   help="coarser surface (0.10 m), reachability map and guard clusters: seconds, less coverage")
+
+
+def _plan_options(p: argparse.ArgumentParser) -> None:
+    """Options of ``inspect`` alone (``reach`` scores every element; it picks no spots or guards)."""
     p.add_argument("--P-s", dest="P_s", type=float, default=0.02,
                    help="spot threshold P_s in [0, 1] (MAVAC recommends 0.02)")
     p.add_argument("--P-g", dest="P_g", type=float, default=0.15,
                    help="guard threshold P_g in [0, 1] (MAVAC recommends 0.15)")
     p.add_argument("--no-nos", action="store_true", help="skip the non-observed-surface stage (no RRT-Connect)")
-    p.add_argument("--fast", action="store_true",
-                   help="coarser surface (0.10 m), reachability map and guard clusters: seconds, less coverage")
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -214,6 +262,7 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .geometry.stain_marking import STAIN_GRAMMAR
     from .params import SETUP_COVER_METHODS
 
     fmt = _HelpFormatter
@@ -235,6 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", help="JSON plan (default: <mesh>_plan.json beside the HTML page)")
     _common(p, role="machine")
     _machine_options(p)
+    _plan_options(p)
     p.set_defaults(func=cmd_inspect)
 
     p = sub.add_parser("setups", formatter_class=fmt, help="setup plan of a stained part (Kabir et al.)",
@@ -244,9 +294,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "2 cm-2 m across.")
     p.add_argument("part", help="part mesh: .stl, .obj, .ply or .dae")
     p.add_argument("--stain", required=True,
-                   help="which faces are stained: up:30 (normal within 30 deg of up; also down, +x, -x, +y, -y, or "
-                        "x,y,z), box:x0,y0,z0,x1,y1,z1, sphere:x,y,z,r (lengths in the file's units), colors "
-                        "(painted in the file), colors:#rrggbb, faces:i,j,k; join several with '+' (AND)")
+                   help=f"which faces are stained: {STAIN_GRAMMAR}. A cone (up:30) is the faces whose normal is "
+                        "within the angle of the direction; box and sphere take face centres, in the file's units; "
+                        "colors the stain painted in the file. Example: --stain up:30,down:30,box:0,0,0,50,50,80")
     p.add_argument("--passes", type=int, choices=(1, 2, 3), default=None,
                    help="cleaning passes of every stained face (default: from --intensity or the colours, else 1)")
     p.add_argument("--intensity", default=None,
@@ -280,6 +330,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _signed_values(argv) -> list[str]:
+    """``--stain -x:45`` and ``--up -y`` as ``--stain=-x:45``: argparse would take a value that
+    starts with '-' for an option."""
+    argv, out = list(argv), []
+    while argv:
+        arg = argv.pop(0)
+        if arg == "--":
+            return out + [arg] + argv
+        if arg in ("--stain", "--up") and argv and re.match(r"-([xyz]|\d|\.\d)", argv[0]):
+            arg = f"{arg}={argv.pop(0)}"
+        out.append(arg)
+    return out
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     print(f"mavac: warning: {message}", file=sys.stderr)
 
@@ -287,13 +351,13 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 def main(argv=None) -> int:
     """Entry point of the ``mavac`` console script; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_signed_values(sys.argv[1:] if argv is None else argv))
     with warnings.catch_warnings():
         warnings.simplefilter("always", UserWarning)
         warnings.showwarning = _show_warning
         try:
             return args.func(args)
-        except (ValueError, TypeError) as exc:
+        except (ValueError, TypeError, OSError) as exc:
             print(f"mavac {args.command}: error: {exc}", file=sys.stderr)
             return 1
         except KeyboardInterrupt:

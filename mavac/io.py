@@ -93,6 +93,14 @@ def atomic_path(path):
         _remove_if_empty(tmp.parent)
 
 
+@contextlib.contextmanager
+def atomic_paths(*paths):
+    """:func:`atomic_path` for several files written together: yield their temporaries and rename
+    them all at the end, so an interrupt never leaves a new file beside an old one."""
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(atomic_path(p)) for p in paths]
+
+
 def write_csv(df, path, **kwargs) -> Path:
     """Write a pandas DataFrame to CSV atomically (no index, fixed float format)."""
     if not callable(getattr(df, "to_csv", None)):
