@@ -3,7 +3,7 @@
 From a mesh file to a result a person can read without the source: an HTML page (framed, with a
 legend, the robot animated), a JSON or CSV file, and a summary on the terminal that names the
 visibility method behind every coverage. Bad input exits with status 1 and the reason, no
-traceback; Ctrl-C exits with status 130 and leaves no half-written file (writes are atomic) and
+traceback; a setup search that ends without a plan exits with status 3 (its files say why); Ctrl-C exits with status 130 and leaves no half-written file (writes are atomic) and
 no meshcat server running.
 """
 
@@ -24,6 +24,8 @@ from . import __version__
 from .config import cache_dir, user_output_dir
 from .io import atomic_paths
 
+#: exit status of a run that ended without a plan (its files say why); 1 is bad input, 130 Ctrl-C
+NO_PLAN = 3
 UNITS_HELP = ("unit of the coordinates in the file: m, cm, mm or in (default: the unit a COLLADA file "
               "declares, metres for STL/OBJ/PLY)")
 VISIBILITY_HELP = ("how 'the camera sees a surface element' is decided: raycast = exact ray casting against "
@@ -195,6 +197,10 @@ def cmd_setups(args) -> int:
           f"passes {np.bincount(part.passes, minlength=4)[1:].tolist()} (1/2/3)")
     print(plan.summary())
     print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
+    if not plan.found:
+        hint = "; raise --t-max or use --method auto" if plan.status == "timed_out" else ""
+        print(f"mavac setups: no plan ({plan.status}){hint}", file=sys.stderr)
+        return NO_PLAN
     return 0
 
 

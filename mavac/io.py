@@ -120,8 +120,9 @@ def write_text(text: str, path) -> Path:
 
 
 def write_json(obj, path) -> Path:
-    """Write JSON atomically (sorted keys, so the same data gives the same bytes)."""
-    return write_text(json.dumps(obj, indent=2, sort_keys=True), path)
+    """Write JSON atomically (sorted keys, so the same data gives the same bytes); ValueError
+    for an infinite or NaN number, which JSON cannot hold (write None and say why instead)."""
+    return write_text(json.dumps(obj, indent=2, sort_keys=True, allow_nan=False), path)
 
 
 def savefig(fig, path, dpi: int = 120) -> Path:

@@ -514,9 +514,25 @@ def _cases_process():
     ]
 
 
+def _cases_issue33():
+    """The command line's input audit (issue 33), at the API the command line calls."""
+    from mavac.inspection.inspection_plan import surface_elements
+
+    big = trimesh.creation.box(extents=[1.2, 0.6, 0.9])
+    return [
+        refuse("accepted", "SetupPlanParams-seed-2**70", lambda: P.SetupPlanParams(seed=2**70), ValueError, "seed"),
+        refuse("accepted", "InspectionParams-seed-2**70", lambda: P.InspectionParams(seed=2**70), ValueError, "seed"),
+        refuse("wrong", "SetupPlannerParams-setup_time-1e308", lambda: P.SetupPlannerParams(setup_time=1e308),
+               ValueError, "setup_time"),
+        refuse("dependency", "Visibility-radius-1e308", lambda: P.Visibility(radius=1e308), ValueError, "radius"),
+        refuse("hang", "surface_elements-spacing-3mm", lambda: surface_elements(big, 0.003, 0), ValueError,
+               "surface elements"),
+    ]
+
+
 def hand_written_cases() -> list[Case]:
     return (_cases_wrong() + _cases_dependency() + _cases_unnamed() + _cases_accepted() + _cases_stain_marking()
-            + _cases_hang() + _cases_process())
+            + _cases_hang() + _cases_process() + _cases_issue33())
 
 
 # ---- generated: every field of every parameter dataclass ----

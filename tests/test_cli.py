@@ -72,6 +72,10 @@ def test_inspect_with_hpr_and_default_output_folder(files, tmp_path, capsys, mon
     (["reach", "{cabinet}", "--units", "mm", "--spacing", "-0.1"], "surface_spacing must be in"),
     (["setups", "{dome}", "--units", "mm", "--stain", "left:3"], "stain spec 'left:3' not understood"),
     (["setups", "{dome}", "--units", "mm", "--stain", "sphere:500,500,500,1"], "picked no face"),
+    (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--setup-time", "1e308"], "setup_time must be in"),
+    (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--seed", str(2**70)], "seed must be in"),
+    (["inspect", "{cabinet}", "--units", "mm", "--visibility", "hpr", "--hpr-radius", "1e308"], "radius must be in"),
+    (["inspect", "{cabinet}", "--units", "mm", "--spacing", "0.003"], "surface elements"),
 ])
 def test_bad_input_exits_1_with_the_reason_and_no_traceback(files, tmp_path, capsys, argv, message):
     paths = {"cabinet": str(files / "cabinet.stl"), "dome": str(files / "dome.ply"),
@@ -285,3 +289,17 @@ def test_an_interrupt_while_writing_keeps_the_old_outputs_together(files, tmp_pa
     assert code == 130
     assert (out.read_text(), js.read_text()) == ("old page", "old plan")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.html", "d.json"]
+
+
+def _strict_json(path):
+    def refuse(constant):
+        raise AssertionError(f"{constant} in {path}")
+    return json.loads(Path(path).read_text(), parse_constant=refuse)
+
+
+def test_a_search_that_finds_no_plan_exits_non_zero_with_strict_json(files, tmp_path, capsys):
+    code, out, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                          "--method", "dfbnb", "--t-max", "1e-9", "--out", str(tmp_path / "d.html")], capsys)
+    assert code == 3 and "NO SOLUTION" in out and "--t-max" in err, (out, err)
+    plan = _strict_json(tmp_path / "d.json")
+    assert plan["status"] == "timed_out" and plan["cost_s"] is None and not plan["setups"]
