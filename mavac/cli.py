@@ -155,17 +155,30 @@ def cmd_inspect(args) -> int:
     return 0
 
 
-def _stain_kwargs(args, scale: float) -> dict:
+def _intensity(value) -> np.ndarray | None:
+    """The ``--intensity`` file's numbers (a .npy array, else text), or ValueError naming it."""
+    if value is None:
+        return None
+    path = Path(value)
+    if not path.is_file():
+        raise ValueError(f"--intensity {value!r} is {'a directory' if path.is_dir() else 'not a file'}")
+    try:
+        array = np.load(path, allow_pickle=False) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
+    except (ValueError, OSError, EOFError) as exc:  # pickled, truncated, garbage (UnicodeDecodeError too)
+        raise ValueError(f"--intensity {value!r} is not a .npy array or a text file of numbers ({exc})") from None
+    if not isinstance(array, np.ndarray) or array.dtype.kind not in "biuf":
+        raise ValueError(f"--intensity {value!r} holds no numeric array (a .npz archive or a structured array)")
+    return array.astype(float)
+
+
+def _stain_kwargs(args, scale: float, intensity) -> dict:
     from .geometry.stain_marking import parse_stain
 
     kw = parse_stain(args.stain, scale=scale)
     if args.passes is not None:
         kw["passes"] = args.passes
-    if args.intensity is not None:
-        path = Path(args.intensity)
-        if not path.is_file():
-            raise ValueError(f"--intensity {str(path)!r} does not exist")
-        kw["intensity"] = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
+    if intensity is not None:
+        kw["intensity"] = intensity
     return kw
 
 
@@ -177,6 +190,7 @@ def cmd_setups(args) -> int:
 
     stem = Path(args.part).stem
     out, js = _outputs(args, args.part, f"{stem}_setups", "json")
+    intensity = _intensity(args.intensity)
     params = SetupPlanParams(seed=args.seed, method=args.method,
                              planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
     t0 = time.perf_counter()
@@ -185,7 +199,7 @@ def cmd_setups(args) -> int:
         mesh = _load(args.part, args.units, "part", args.up)
         _next(bar, "marking the stain")
         part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
-                          **_stain_kwargs(args, float(mesh.metadata["mavac_scale"])))
+                          **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
         _next(bar, "reach test and planning")
         plan = plan_setups(part, params=params)
         _next(bar, "writing")

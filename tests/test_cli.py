@@ -303,3 +303,25 @@ def test_a_search_that_finds_no_plan_exits_non_zero_with_strict_json(files, tmp_
     assert code == 3 and "NO SOLUTION" in out and "--t-max" in err, (out, err)
     plan = _strict_json(tmp_path / "d.json")
     assert plan["status"] == "timed_out" and plan["cost_s"] is None and not plan["setups"]
+
+
+@pytest.mark.parametrize("kind", ["pickled", "truncated", "garbage", "text", "directory", "npz"])
+def test_a_bad_intensity_file_names_the_option(files, tmp_path, capsys, kind):
+    bad = tmp_path / "in" / ("i.npz" if kind == "npz" else "i.txt" if kind == "text" else "i.npy")
+    bad.parent.mkdir()
+    if kind == "pickled":
+        np.save(bad, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    elif kind == "truncated":
+        np.save(bad, np.full(642, 0.5))
+        bad.write_bytes(bad.read_bytes()[:200])
+    elif kind == "garbage":
+        bad.write_bytes(bytes(range(256)) * 4)
+    elif kind == "text":
+        bad.write_text("half\nfull\n")
+    elif kind == "directory":
+        bad.mkdir()
+    else:
+        np.savez(bad, a=np.full(642, 0.5))
+    code, _, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                        "--intensity", str(bad), "--out", str(tmp_path / "d.html")], capsys)
+    assert code == 1 and err.startswith("mavac setups: error: --intensity") and "Traceback" not in err, err
