@@ -23,6 +23,11 @@ from .validate import CheckedFields, check_positive, check_range, ranged
 # ---- MAVAC camera (read by mavac.vision.camera and mavac.vision.visibility) ----
 
 
+#: Most experiments a GPR run or a random search may take: each is a simulated scrubbing run
+#: (seconds), and 100 times the default budget is far beyond Kabir's tens (Sec. IX-C).
+MAX_EXPERIMENTS = 10_000
+
+
 @dataclass(frozen=True)
 class CameraParams(CheckedFields):
     """Emulated camera of MAVAC ("Camera field of view (FOV)"): a rectangular pyramid along the
@@ -168,8 +173,9 @@ class GPRParams(CheckedFields):
     # With 2 points per axis run the 2^(5-1) resolution-V half fraction (16 points + centre)
     # instead of the full 32 (ours; classic fractional factorial screening design).
     half_fraction: bool = True
-    # Experiment budget (exploration included); the run stops there, feasible or not. Ours.
-    max_experiments: int = ranged(100, ge=1)
+    # Experiment budget (exploration included); the run stops there, feasible or not. Ours;
+    # at most MAX_EXPERIMENTS.
+    max_experiments: int = ranged(100, ge=1, le=MAX_EXPERIMENTS)
     # Candidate points per iteration (seeded Sobol, plus local ones around the incumbent). Ours.
     # At most 2^20: above, one GP prediction per iteration needs gigabytes.
     n_candidates: int = ranged(2048, ge=16, le=2**20)
