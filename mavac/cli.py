@@ -151,8 +151,17 @@ def cmd_inspect(args) -> int:
             plan.to_html(tmp_out)
         _next(bar, "done")
     print(plan.summary())
+    _print_frame(machine)
     print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def _print_frame(machine) -> None:
+    """Say where the machine frame is in the file, when it is not the file's own origin."""
+    if np.any(machine.file_offset):
+        x, y, z = machine.file_offset
+        print(f"coordinates are in the machine frame (floor z = 0, centred): add ({x:g}, {y:g}, {z:g}) m "
+              "for the file's (after --units and --up)")
 
 
 def _intensity(value) -> np.ndarray | None:
@@ -238,6 +247,7 @@ def cmd_reach(args) -> int:
             study.to_html(tmp_out)
         _next(bar, "done")
     print(study.summary())
+    _print_frame(machine)
     print(f"wrote {out} and {csv} in {time.perf_counter() - t0:.1f} s")
     return 0
 

@@ -92,6 +92,20 @@ def _read(path: Path) -> trimesh.Trimesh:
     return loaded
 
 
+def local_origin(vertices) -> np.ndarray:
+    """Whole-metre point nearest the centre of ``vertices``' bounding box, on z = 0, (3,) float:
+    the origin of computations that must not depend on where the mesh sits in x and y.
+
+    Embree (Open3D ray casting) takes float32, ~1 mm apart at 10 km, so vertices and ray origins
+    are cast relative to it; voxel grids are anchored at it. Whole metres make moved copies of a
+    mesh give the same float32 values and cells, and leave a mesh centred within half a metre of
+    the world origin as it was.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    centre = np.round((v.min(axis=0) + v.max(axis=0)) / 2.0) if len(v) else np.zeros(3)
+    return np.array([centre[0], centre[1], 0.0])  # z = 0: machines stand on the floor
+
+
 def check_mesh(name: str, mesh) -> trimesh.Trimesh:
     """A ``trimesh.Trimesh`` with at least one face, finite vertices and faces that index
     them: the check every function taking a user's mesh runs first (``load_mesh`` refuses the
