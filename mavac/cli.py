@@ -156,6 +156,17 @@ def cmd_inspect(args) -> int:
     return 0
 
 
+def _unrepeated(make_plan):
+    """``make_plan()``, its warnings shown except those its summary lists (each said once)."""
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        plan = make_plan()
+    for w in seen:
+        if str(w.message) not in plan.warnings:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return plan
+
+
 def _print_frame(machine) -> None:
     """Say where the machine frame is in the file, when it is not the file's own origin."""
     if np.any(machine.file_offset):
@@ -207,10 +218,12 @@ def cmd_setups(args) -> int:
     with bar:
         mesh = _load(args.part, args.units, "part", args.up)
         _next(bar, "marking the stain")
-        part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
-                          **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
+        with warnings.catch_warnings():  # the plan's summary says it
+            warnings.filterwarnings("ignore", message=".*larger than the tool tip")
+            part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
+                              **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
         _next(bar, "reach test and planning")
-        plan = plan_setups(part, params=params)
+        plan = _unrepeated(lambda: plan_setups(part, params=params))
         _next(bar, "writing")
         with atomic_paths(out, js) as (tmp_out, tmp_js):
             plan.to_json(tmp_js)

@@ -119,7 +119,7 @@ def test_setups_from_painted_colours_subdivides_large_patches(files, tmp_path, c
     assert "larger than the tool tip" not in err  # subdivided below 1.5 cm^2 first
     code, out, err = run(["setups", str(files / "painted.ply"), "--stain", "colors", "--quiet",
                           "--out", str(tmp_path / "q.html")], capsys)
-    assert code == 0 and "mavac: warning: " in err and "larger than the tool tip" in err
+    assert code == 0 and "warning: " in out and "larger than the tool tip" in out  # in the summary, once
 
 
 def test_reach_writes_a_heat_map_and_a_csv(files, tmp_path, capsys):
@@ -325,3 +325,9 @@ def test_a_bad_intensity_file_names_the_option(files, tmp_path, capsys, kind):
     code, _, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
                         "--intensity", str(bad), "--out", str(tmp_path / "d.html")], capsys)
     assert code == 1 and err.startswith("mavac setups: error: --intensity") and "Traceback" not in err, err
+
+
+def test_the_tool_tip_warning_is_printed_once(files, tmp_path, capsys):
+    code, out, err = run(["setups", str(files / "painted.ply"), "--stain", "colors", "--quiet",
+                          "--out", str(tmp_path / "q.html")], capsys)
+    assert code == 0 and (out + err).count("larger than the tool tip") == 1, (out, err)
