@@ -3,17 +3,21 @@
 From a mesh file to a result a person can read without the source: an HTML page (framed, with a
 legend, the robot animated), a JSON or CSV file, and a summary on the terminal that names the
 visibility method behind every coverage. Bad input exits with status 1 and the reason, no
-traceback; a setup search that ends without a plan exits with status 3 (its files say why); Ctrl-C exits with status 130 and leaves no half-written file (writes are atomic) and
-no meshcat server running.
+traceback; a setup search that ends without a plan exits with status 3 (its files say why);
+Ctrl-C or a closed terminal (SIGHUP) exits with status 130 and leaves no half-written file (the
+outputs are renamed into place together at the end) and no meshcat server running.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import os
 import re
+import signal
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -387,6 +391,21 @@ def _signed_values(argv) -> list[str]:
     return out
 
 
+@contextlib.contextmanager
+def _hangup_as_interrupt():
+    """SIGHUP (the terminal closed) raises KeyboardInterrupt, as Ctrl-C does, so the cleanup
+    runs: no half-written file, no meshcat server left. Main thread only; under ``nohup``
+    (SIGHUP ignored) it stays ignored."""
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGHUP) == signal.SIG_IGN:
+        yield
+        return
+    previous = signal.signal(signal.SIGHUP, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGHUP, previous)
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     print(f"mavac: warning: {message}", file=sys.stderr)
 
@@ -395,7 +414,7 @@ def main(argv=None) -> int:
     """Entry point of the ``mavac`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(_signed_values(sys.argv[1:] if argv is None else argv))
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), _hangup_as_interrupt():
         warnings.simplefilter("always", UserWarning)
         warnings.showwarning = _show_warning
         try:

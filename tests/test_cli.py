@@ -331,3 +331,13 @@ def test_the_tool_tip_warning_is_printed_once(files, tmp_path, capsys):
     code, out, err = run(["setups", str(files / "painted.ply"), "--stain", "colors", "--quiet",
                           "--out", str(tmp_path / "q.html")], capsys)
     assert code == 0 and (out + err).count("larger than the tool tip") == 1, (out, err)
+
+
+def test_sighup_is_an_interrupt(tmp_path):
+    """A closed terminal (SIGHUP) ends the command as Ctrl-C does: status 130, cleanup run."""
+    code = ("import os, signal, sys, time\nfrom mavac import cli\n"
+            "def hung_up(args):\n    os.kill(os.getpid(), signal.SIGHUP)\n    time.sleep(30)\n"
+            "cli.cmd_setups = hung_up\n"
+            "sys.exit(cli.main(['setups', 'p.stl', '--stain', 'up:30']))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert done.returncode == 130 and "interrupted" in done.stderr, (done.returncode, done.stderr)

@@ -31,3 +31,30 @@ def test_handler_is_restored_after_the_scene():
     with sigterm_as_interrupt():
         assert signal.getsignal(signal.SIGTERM) is not before
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
+    """A SIGINT that arrives while ``meshcat.Visualizer()`` starts its server (before the block
+    that shuts it down) must not leave the server running."""
+    import meshcat
+
+    from mavac.viz import meshcat_scene as ms
+
+    servers, real = [], meshcat.Visualizer
+
+    def starting(*args, **kwargs):
+        vis = real(*args, **kwargs)
+        servers.append(vis.window.server_proc)
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C just as the server is up
+        return vis
+
+    monkeypatch.setattr(meshcat, "Visualizer", starting)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with ms.scene():
+                pass
+        assert servers and servers[0].poll() is not None
+    finally:
+        for proc in servers:
+            if proc.poll() is None:
+                proc.kill()

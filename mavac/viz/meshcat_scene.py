@@ -68,19 +68,32 @@ def sigterm_as_interrupt():
             signal.raise_signal(signal.SIGTERM)
 
 
+#: signals held while the server starts, delivered once the block that ends it is entered
+_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+
+
 @contextlib.contextmanager
 def scene():
     """A fresh meshcat visualizer whose server is shut down on exit: on error, SIGINT and
-    SIGTERM too (:func:`sigterm_as_interrupt`)."""
+    SIGTERM too (:func:`sigterm_as_interrupt`), also when they arrive while it starts.
+
+    meshcat's server (``python -m meshcat.servers.zmqserver``) takes no address: its ZeroMQ
+    socket listens on 127.0.0.1, its web server on every interface for the seconds it runs.
+    """
     import meshcat
 
     with sigterm_as_interrupt():
-        with contextlib.redirect_stdout(io.StringIO()):  # the URL of a server that will not outlive us
-            vis = meshcat.Visualizer()
+        held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
         try:
-            yield vis
+            with contextlib.redirect_stdout(io.StringIO()):  # the URL of a server that will not outlive us
+                vis = meshcat.Visualizer()
+            try:
+                signal.pthread_sigmask(signal.SIG_SETMASK, held)  # a held Ctrl-C arrives here
+                yield vis
+            finally:
+                shutdown(vis)
         finally:
-            shutdown(vis)
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def shutdown(vis) -> None:
