@@ -215,8 +215,11 @@ def cmd_setups(args) -> int:
     stem = Path(args.part).stem
     out, js = _outputs(args, args.part, f"{stem}_setups", "json")
     intensity = _intensity(args.intensity)
+    if args.t_max is not None and args.method not in ("dfbnb", "both"):
+        raise ValueError(f"--t-max applies only with --method dfbnb or both (the search it bounds), not {args.method}")
+    t_max = 10.0 if args.t_max is None else args.t_max
     params = SetupPlanParams(seed=args.seed, method=args.method,
-                             planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
+                             planner=SetupPlannerParams(t_max=t_max, setup_time=args.setup_time))
     t0 = time.perf_counter()
     bar = _stage_bar(["loading part", "marking the stain", "reach test and planning", "writing"], args.quiet)
     with bar:
@@ -356,8 +359,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="auto = the proven optimum (reduction, size bound, enumeration, integer program; node budgets "
                         "only); milp = the integer program alone; dfbnb = the paper's depth-first branch and bound; "
                         "both = DFBnB's plan with the proven optimum beside it")
-    p.add_argument("--t-max", type=float, default=10.0,
-                   help="time bound of the paper's branch-and-bound search (methods dfbnb and both), s")
+    p.add_argument("--t-max", type=float, default=None,
+                   help="time bound of the paper's branch-and-bound search, s (methods dfbnb and both only; "
+                        "default 10)")
     p.add_argument("--out", help="HTML page (default: <part>_setups.html in $MAVAC_OUT or the current directory)")
     p.add_argument("--json", help="JSON plan (default: <part>_setups.json beside the HTML page)")
     _common(p, role="part")

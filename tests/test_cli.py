@@ -76,6 +76,7 @@ def test_inspect_with_hpr_and_default_output_folder(files, tmp_path, capsys, mon
     (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--seed", str(2**70)], "seed must be in"),
     (["inspect", "{cabinet}", "--units", "mm", "--visibility", "hpr", "--hpr-radius", "1e308"], "radius must be in"),
     (["inspect", "{cabinet}", "--units", "mm", "--spacing", "0.003"], "surface elements"),
+    (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--t-max", "5"], "--t-max applies only"),
 ])
 def test_bad_input_exits_1_with_the_reason_and_no_traceback(files, tmp_path, capsys, argv, message):
     paths = {"cabinet": str(files / "cabinet.stl"), "dome": str(files / "dome.ply"),
