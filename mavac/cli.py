@@ -83,7 +83,7 @@ def _outputs(args, source: str, stem: str, companion: str) -> tuple[Path, Path]:
         else:
             paths[flag] = paths["--out"].with_suffix(f".{default}") if default else user_output_dir() / f"{stem}.html"
         if paths[flag].resolve() == Path(source).resolve():
-            raise ValueError(f"{flag} {value} is the input mesh; give another file name")
+            raise ValueError(f"{flag} {paths[flag]} is the input mesh; give another file name")
         _checked_output(flag, paths[flag])
     out, other = paths.values()
     if out.resolve() == other.resolve():
@@ -94,7 +94,7 @@ def _outputs(args, source: str, stem: str, companion: str) -> tuple[Path, Path]:
 #: ``--up`` -> rotation turning that axis of the file onto +z (signed permutations: exact)
 UP_TURNS = {"x": [[0, 0, -1], [0, 1, 0], [1, 0, 0]], "-x": [[0, 0, 1], [0, 1, 0], [-1, 0, 0]],
             "y": [[1, 0, 0], [0, 0, -1], [0, 1, 0]], "-y": [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
-            "z": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "-z": [[1, 0, 0], [0, -1, 0], [0, 0, -1]]}
+            "-z": [[1, 0, 0], [0, -1, 0], [0, 0, -1]]}
 UP_CHOICES = ("+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z")
 
 
@@ -105,9 +105,9 @@ def _load(path, units, role, up):
         mesh = load_mesh(path, units=units, role=role)
     except ValueError as exc:  # name the flag, not the keyword argument
         raise ValueError(re.sub(r"units='(\w+)'", r"--units \1", str(exc))) from None
-    turn = np.eye(4)
-    turn[:3, :3] = UP_TURNS[up.lstrip("+")]
     if up.lstrip("+") != "z":  # e.g. a y-up export (many COLLADA/OBJ files)
+        turn = np.eye(4)
+        turn[:3, :3] = UP_TURNS[up.lstrip("+")]
         mesh.apply_transform(turn)
     return mesh
 

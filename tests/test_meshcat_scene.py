@@ -2,6 +2,7 @@
 
 import os
 import signal
+import threading
 
 import pytest
 from _children import IN_MESHCAT_SCENE, alive, end, gone_within, start, wait_line
@@ -49,12 +50,15 @@ def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
         return vis
 
     monkeypatch.setattr(meshcat, "Visualizer", starting)
+    idle = threading.Event()  # another thread, which a process-wide signal may be handed to
+    threading.Thread(target=idle.wait, daemon=True).start()
     try:
         with pytest.raises(KeyboardInterrupt):
             with ms.scene():
                 pass
         assert servers and servers[0].poll() is not None
     finally:
+        idle.set()
         for proc in servers:
             if proc.poll() is None:
                 proc.kill()

@@ -403,6 +403,7 @@ def parse_stain(spec: str, scale: float = 1.0) -> dict:
     default 30), ``box:x0,y0,z0,x1,y1,z1``, ``sphere:x,y,z,r``, ``colors`` or
     ``colors:#rrggbb``, ``faces:i,j,k``. Selectors of one kind are united (``up:30,down:30``:
     top and bottom), different kinds intersected (``up:30,box:...``: the top inside the box).
+    Whole numbers after ``faces:`` are face indices, so a direction vector there needs its angle.
     Lengths are in the file's units and multiplied by ``scale`` (metres per unit).
     """
     out: dict = {}
