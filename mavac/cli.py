@@ -381,6 +381,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: parameter fields the command line sets -> their flags, to name the flag in an error
+FIELD_FLAGS = {"radius": "--hpr-radius", "surface_spacing": "--spacing", "P_s": "--P-s", "P_g": "--P-g",
+               "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed"}
+
+
+def _with_flag(message: str) -> str:
+    """``message`` led by the flag of the parameter it starts with (``radius must be ...``)."""
+    field = re.match(r"(\w+) (must|=)", message)
+    flag = FIELD_FLAGS.get(field.group(1)) if field else None
+    return f"{flag}: {message}" if flag else message
+
+
 def _signed_values(argv) -> list[str]:
     """``--stain -x:45`` and ``--up -y`` as ``--stain=-x:45``: argparse would take a value that
     starts with '-' for an option."""
@@ -424,7 +436,7 @@ def main(argv=None) -> int:
         try:
             return args.func(args)
         except (ValueError, TypeError, OSError) as exc:
-            print(f"mavac {args.command}: error: {exc}", file=sys.stderr)
+            print(f"mavac {args.command}: error: {_with_flag(str(exc))}", file=sys.stderr)
             return 1
         except KeyboardInterrupt:
             print(f"mavac {args.command}: interrupted", file=sys.stderr)

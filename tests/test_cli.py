@@ -342,3 +342,17 @@ def test_sighup_is_an_interrupt(tmp_path):
             "sys.exit(cli.main(['setups', 'p.stl', '--stain', 'up:30']))\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=60)
     assert done.returncode == 130 and "interrupted" in done.stderr, (done.returncode, done.stderr)
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["inspect", "{cabinet}", "--visibility", "hpr", "--hpr-radius", "1e308"], "--hpr-radius"),
+    (["inspect", "{cabinet}", "--spacing", "0.003"], "--spacing"),
+    (["inspect", "{cabinet}", "--P-g", "2"], "--P-g"),
+    (["setups", "{dome}", "--stain", "up:60", "--setup-time", "1e308"], "--setup-time"),
+    (["setups", "{dome}", "--stain", "up:60", "--seed", str(2**70)], "--seed"),
+])
+def test_a_refused_parameter_is_named_by_its_flag(files, tmp_path, capsys, argv, flag):
+    paths = {"cabinet": str(files / "cabinet.stl"), "dome": str(files / "dome.ply")}
+    argv = [a.format(**paths) for a in argv] + ["--units", "mm", "--quiet", "--out", str(tmp_path / "x.html")]
+    code, _, err = run(argv, capsys)
+    assert code == 1 and err.startswith(f"mavac {argv[0]}: error: {flag}: "), err
