@@ -3,16 +3,21 @@
 From a mesh file to a result a person can read without the source: an HTML page (framed, with a
 legend, the robot animated), a JSON or CSV file, and a summary on the terminal that names the
 visibility method behind every coverage. Bad input exits with status 1 and the reason, no
-traceback; Ctrl-C exits with status 130 and leaves no half-written file (writes are atomic) and
-no meshcat server running.
+traceback; a setup search that ends without a plan exits with status 3 (its files say why);
+Ctrl-C or a closed terminal (SIGHUP) exits with status 130 and leaves no half-written file (the
+outputs are renamed into place together at the end) and no meshcat server running.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
+import os
 import re
+import signal
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -20,8 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .config import user_output_dir
+from .config import cache_dir, user_output_dir
+from .io import atomic_paths
 
+#: exit status of a run that ended without a plan (its files say why); 1 is bad input, 130 Ctrl-C
+NO_PLAN = 3
 UNITS_HELP = ("unit of the coordinates in the file: m, cm, mm or in (default: the unit a COLLADA file "
               "declares, metres for STL/OBJ/PLY)")
 VISIBILITY_HELP = ("how 'the camera sees a surface element' is decided: raycast = exact ray casting against "
@@ -45,11 +53,49 @@ def _next(bar, label: str):
     bar.set_description_str(label)
 
 
-def _default(path, stem: str, suffix: str, beside=None) -> Path:
-    """The path asked for, else ``<stem><suffix>`` beside ``beside`` or in the user's output folder."""
-    if path:
-        return Path(path)
-    return (Path(beside).parent if beside else user_output_dir()) / f"{stem}{suffix}"
+def _checked_output(flag: str, path: Path) -> Path:
+    """``path`` if a file can be written there, else ValueError naming ``flag`` (before any work)."""
+    if path.is_dir():
+        raise ValueError(f"{flag} {path} is a directory; give a file name, e.g. {path / 'result.html'}")
+    folder = path.absolute().parent
+    while not folder.exists():  # atomic writes create the missing folders
+        folder = folder.parent
+    if not folder.is_dir():
+        raise ValueError(f"{flag} {path}: {folder} is a file, not a directory")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{flag} {path}: cannot write into {folder} (read-only)")
+    return path
+
+
+def _outputs(args, source: str, stem: str, companion: str) -> tuple[Path, Path]:
+    """The HTML page and its ``.json`` or ``.csv`` companion, checked before any work.
+
+    The page defaults to ``<stem>.html`` in the user's output folder; the companion to the page's
+    name with its own suffix. Neither may be the input, nor both the same file.
+    """
+    cache_dir()  # refuses a MAVAC_CACHE that names a file, now rather than after the work
+    paths = {}
+    for flag, value, default in (("--out", args.out, None), (f"--{companion}", getattr(args, companion), companion)):
+        if value is not None and not value.strip():
+            raise ValueError(f"{flag} is empty; give a file name")
+        if value is not None:
+            paths[flag] = Path(value).expanduser()
+        else:
+            paths[flag] = paths["--out"].with_suffix(f".{default}") if default else user_output_dir() / f"{stem}.html"
+        if paths[flag].resolve() == Path(source).resolve():
+            raise ValueError(f"{flag} {paths[flag]} is the input mesh; give another file name")
+        _checked_output(flag, paths[flag])
+    out, other = paths.values()
+    if out.resolve() == other.resolve():
+        raise ValueError(f"both --out and --{companion} name {out}; give two different files")
+    return out, other
+
+
+#: ``--up`` -> rotation turning that axis of the file onto +z (signed permutations: exact)
+UP_TURNS = {"x": [[0, 0, -1], [0, 1, 0], [1, 0, 0]], "-x": [[0, 0, 1], [0, 1, 0], [-1, 0, 0]],
+            "y": [[1, 0, 0], [0, 0, -1], [0, 1, 0]], "-y": [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
+            "-z": [[1, 0, 0], [0, -1, 0], [0, 0, -1]]}
+UP_CHOICES = ("+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z")
 
 
 def _load(path, units, role, up):
@@ -59,8 +105,10 @@ def _load(path, units, role, up):
         mesh = load_mesh(path, units=units, role=role)
     except ValueError as exc:  # name the flag, not the keyword argument
         raise ValueError(re.sub(r"units='(\w+)'", r"--units \1", str(exc))) from None
-    if up == "y":  # y-up export (many COLLADA/OBJ files): turn y onto z
-        mesh.apply_transform(np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]]))
+    if up.lstrip("+") != "z":  # e.g. a y-up export (many COLLADA/OBJ files)
+        turn = np.eye(4)
+        turn[:3, :3] = UP_TURNS[up.lstrip("+")]
+        mesh.apply_transform(turn)
     return mesh
 
 
@@ -73,9 +121,11 @@ def _inspection_params(args):
         params = fast_params()
     else:
         params = InspectionParams()
-    spot = dataclasses.replace(params.spot, P_s=args.P_s)
-    guard = dataclasses.replace(params.guard, P_g=args.P_g)
-    nos = dataclasses.replace(params.nos, enabled=not args.no_nos)
+    if args.hpr_radius is not None and args.visibility != "hpr":
+        raise ValueError("--hpr-radius applies only with --visibility hpr")
+    spot = dataclasses.replace(params.spot, P_s=getattr(args, "P_s", params.spot.P_s))  # inspect only
+    guard = dataclasses.replace(params.guard, P_g=getattr(args, "P_g", params.guard.P_g))
+    nos = dataclasses.replace(params.nos, enabled=not getattr(args, "no_nos", False))
     visibility = dataclasses.replace(params.visibility, method=args.visibility, radius=args.hpr_radius)
     spacing = params.surface_spacing if args.spacing is None else args.spacing
     return dataclasses.replace(params, surface_spacing=spacing, seed=args.seed, spot=spot, guard=guard, nos=nos,
@@ -88,8 +138,7 @@ def cmd_inspect(args) -> int:
     from .inspection.inspection_plan import plan_from_context, prepare_offline, warn_low_coverage
 
     stem = Path(args.mesh).stem
-    out = _default(args.out, stem, "_plan.html")
-    js = _default(args.json, stem, "_plan.json", beside=out)
+    out, js = _outputs(args, args.mesh, f"{stem}_plan", "json")
     params = _inspection_params(args)
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "surface, map, spots", "guards and NoS guards", "writing"], args.quiet)
@@ -101,25 +150,59 @@ def cmd_inspect(args) -> int:
         plan = plan_from_context(ctx, progress=_bars(args))
         warn_low_coverage(ctx, plan)
         _next(bar, "writing")
-        plan.to_json(js)
-        plan.to_html(out)
+        with atomic_paths(out, js) as (tmp_out, tmp_js):
+            plan.to_json(tmp_js)
+            plan.to_html(tmp_out)
         _next(bar, "done")
     print(plan.summary())
+    _print_frame(machine)
     print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
-def _stain_kwargs(args, scale: float) -> dict:
+def _unrepeated(make_plan):
+    """``make_plan()``, its warnings shown except those its summary lists (each said once)."""
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        plan = make_plan()
+    for w in seen:
+        if str(w.message) not in plan.warnings:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return plan
+
+
+def _print_frame(machine) -> None:
+    """Say where the machine frame is in the file, when it is not the file's own origin."""
+    if np.any(machine.file_offset):
+        x, y, z = machine.file_offset
+        print(f"coordinates are in the machine frame (floor z = 0, centred): add ({x:g}, {y:g}, {z:g}) m "
+              "for the file's (after --units and --up)")
+
+
+def _intensity(value) -> np.ndarray | None:
+    """The ``--intensity`` file's numbers (a .npy array, else text), or ValueError naming it."""
+    if value is None:
+        return None
+    path = Path(value)
+    if not path.is_file():
+        raise ValueError(f"--intensity {value!r} is {'a directory' if path.is_dir() else 'not a file'}")
+    try:
+        array = np.load(path, allow_pickle=False) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
+    except (ValueError, OSError, EOFError) as exc:  # pickled, truncated, garbage (UnicodeDecodeError too)
+        raise ValueError(f"--intensity {value!r} is not a .npy array or a text file of numbers ({exc})") from None
+    if not isinstance(array, np.ndarray) or array.dtype.kind not in "biuf":
+        raise ValueError(f"--intensity {value!r} holds no numeric array (a .npz archive or a structured array)")
+    return array.astype(float)
+
+
+def _stain_kwargs(args, scale: float, intensity) -> dict:
     from .geometry.stain_marking import parse_stain
 
     kw = parse_stain(args.stain, scale=scale)
     if args.passes is not None:
         kw["passes"] = args.passes
-    if args.intensity is not None:
-        path = Path(args.intensity)
-        if not path.is_file():
-            raise ValueError(f"--intensity {str(path)!r} does not exist")
-        kw["intensity"] = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
+    if intensity is not None:
+        kw["intensity"] = intensity
     return kw
 
 
@@ -130,27 +213,37 @@ def cmd_setups(args) -> int:
     from .setups.setup_plan import plan_setups
 
     stem = Path(args.part).stem
-    out = _default(args.out, stem, "_setups.html")
-    js = _default(args.json, stem, "_setups.json", beside=out)
+    out, js = _outputs(args, args.part, f"{stem}_setups", "json")
+    intensity = _intensity(args.intensity)
+    if args.t_max is not None and args.method not in ("dfbnb", "both"):
+        raise ValueError(f"--t-max applies only with --method dfbnb or both (the search it bounds), not {args.method}")
+    t_max = 10.0 if args.t_max is None else args.t_max
     params = SetupPlanParams(seed=args.seed, method=args.method,
-                             planner=SetupPlannerParams(t_max=args.t_max, setup_time=args.setup_time))
+                             planner=SetupPlannerParams(t_max=t_max, setup_time=args.setup_time))
     t0 = time.perf_counter()
     bar = _stage_bar(["loading part", "marking the stain", "reach test and planning", "writing"], args.quiet)
     with bar:
         mesh = _load(args.part, args.units, "part", args.up)
         _next(bar, "marking the stain")
-        part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
-                          **_stain_kwargs(args, float(mesh.metadata["mavac_scale"])))
+        with warnings.catch_warnings():  # the plan's summary says it
+            warnings.filterwarnings("ignore", message=".*larger than the tool tip")
+            part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
+                              **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
         _next(bar, "reach test and planning")
-        plan = plan_setups(part, params=params)
+        plan = _unrepeated(lambda: plan_setups(part, params=params))
         _next(bar, "writing")
-        plan.to_json(js)
-        plan.to_html(out, part, params=params)
+        with atomic_paths(out, js) as (tmp_out, tmp_js):
+            plan.to_json(tmp_js)
+            plan.to_html(tmp_out, part, params=params)
         _next(bar, "done")
     print(f"{stem}: stain of {len(part.stain_faces)} patches, {part.patch_areas.sum() * 1e4:.1f} cm^2, "
           f"passes {np.bincount(part.passes, minlength=4)[1:].tolist()} (1/2/3)")
     print(plan.summary())
     print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
+    if not plan.found:
+        hint = "; raise --t-max or use --method auto" if plan.status == "timed_out" else ""
+        print(f"mavac setups: no plan ({plan.status}){hint}", file=sys.stderr)
+        return NO_PLAN
     return 0
 
 
@@ -160,8 +253,7 @@ def cmd_reach(args) -> int:
     from .inspection.reach_study import reach_study
 
     stem = Path(args.mesh).stem
-    out = _default(args.out, stem, "_reach.html")
-    csv = _default(args.csv, stem, "_reach.csv", beside=out)
+    out, csv = _outputs(args, args.mesh, f"{stem}_reach", "csv")
     params = _inspection_params(args)
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "reach study", "writing"], args.quiet)
@@ -170,18 +262,20 @@ def cmd_reach(args) -> int:
         _next(bar, "reach study")
         study = reach_study(machine, params=params, progress=_bars(args))
         _next(bar, "writing")
-        study.to_csv(csv)
-        study.to_html(out)
+        with atomic_paths(out, csv) as (tmp_out, tmp_csv):
+            study.to_csv(tmp_csv)
+            study.to_html(tmp_out)
         _next(bar, "done")
     print(study.summary())
+    _print_frame(machine)
     print(f"wrote {out} and {csv} in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
 def _common(p: argparse.ArgumentParser, *, role: str) -> None:
     p.add_argument("--units", choices=("m", "cm", "mm", "in"), default=None, help=UNITS_HELP)
-    p.add_argument("--up", choices=("z", "y"), default="z",
-                   help="which axis of the file points up (y: turned so that it becomes z)")
+    p.add_argument("--up", choices=UP_CHOICES, default="z", metavar="{+x,-x,+y,-y,+z,-z}",
+                   help="which axis of the file points up (x = +x; the mesh is turned so that it becomes +z)")
     p.add_argument("--seed", type=int, default=0, help="seed of every random choice (same seed, same result)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(role=role)
@@ -195,13 +289,17 @@ def _machine_options(p: argparse.ArgumentParser) -> None:
                    help="HPR radius in metres for every viewpoint (default: a factor of the farthest point distance)")
     p.add_argument("--spacing", type=float, default=None,
                    help="distance between surface elements of S, metres (default 0.05; 0.10 with --fast)")
+    p.add_argument("--fast", action="store_true",
+                   help="coarser surface (0.10 m), reachability map and guard clusters: seconds, less coverage")
+
+
+def _plan_options(p: argparse.ArgumentParser) -> None:
+    """Options of ``inspect`` alone (``reach`` scores every element; it picks no spots or guards)."""
     p.add_argument("--P-s", dest="P_s", type=float, default=0.02,
                    help="spot threshold P_s in [0, 1] (MAVAC recommends 0.02)")
     p.add_argument("--P-g", dest="P_g", type=float, default=0.15,
                    help="guard threshold P_g in [0, 1] (MAVAC recommends 0.15)")
     p.add_argument("--no-nos", action="store_true", help="skip the non-observed-surface stage (no RRT-Connect)")
-    p.add_argument("--fast", action="store_true",
-                   help="coarser surface (0.10 m), reachability map and guard clusters: seconds, less coverage")
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -214,6 +312,7 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .geometry.stain_marking import STAIN_GRAMMAR
     from .params import SETUP_COVER_METHODS
 
     fmt = _HelpFormatter
@@ -235,6 +334,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", help="JSON plan (default: <mesh>_plan.json beside the HTML page)")
     _common(p, role="machine")
     _machine_options(p)
+    _plan_options(p)
     p.set_defaults(func=cmd_inspect)
 
     p = sub.add_parser("setups", formatter_class=fmt, help="setup plan of a stained part (Kabir et al.)",
@@ -244,9 +344,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "2 cm-2 m across.")
     p.add_argument("part", help="part mesh: .stl, .obj, .ply or .dae")
     p.add_argument("--stain", required=True,
-                   help="which faces are stained: up:30 (normal within 30 deg of up; also down, +x, -x, +y, -y, or "
-                        "x,y,z), box:x0,y0,z0,x1,y1,z1, sphere:x,y,z,r (lengths in the file's units), colors "
-                        "(painted in the file), colors:#rrggbb, faces:i,j,k; join several with '+' (AND)")
+                   help=f"which faces are stained: {STAIN_GRAMMAR}. A cone (up:30) is the faces whose normal is "
+                        "within the angle of the direction; box and sphere take face centres, in the file's units; "
+                        "colors the stain painted in the file. Example: --stain up:30,down:30,box:0,0,0,50,50,80")
     p.add_argument("--passes", type=int, choices=(1, 2, 3), default=None,
                    help="cleaning passes of every stained face (default: from --intensity or the colours, else 1)")
     p.add_argument("--intensity", default=None,
@@ -259,8 +359,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="auto = the proven optimum (reduction, size bound, enumeration, integer program; node budgets "
                         "only); milp = the integer program alone; dfbnb = the paper's depth-first branch and bound; "
                         "both = DFBnB's plan with the proven optimum beside it")
-    p.add_argument("--t-max", type=float, default=10.0,
-                   help="time bound of the paper's branch-and-bound search (methods dfbnb and both), s")
+    p.add_argument("--t-max", type=float, default=None,
+                   help="time bound of the paper's branch-and-bound search, s (methods dfbnb and both only; "
+                        "default 10)")
     p.add_argument("--out", help="HTML page (default: <part>_setups.html in $MAVAC_OUT or the current directory)")
     p.add_argument("--json", help="JSON plan (default: <part>_setups.json beside the HTML page)")
     _common(p, role="part")
@@ -280,6 +381,47 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: parameter fields the command line sets -> their flags, to name the flag in an error
+FIELD_FLAGS = {"radius": "--hpr-radius", "surface_spacing": "--spacing", "P_s": "--P-s", "P_g": "--P-g",
+               "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed"}
+
+
+def _with_flag(message: str) -> str:
+    """``message`` led by the flag of the parameter it starts with (``radius must be ...``)."""
+    field = re.match(r"(\w+) (must|=)", message)
+    flag = FIELD_FLAGS.get(field.group(1)) if field else None
+    return f"{flag}: {message}" if flag else message
+
+
+def _signed_values(argv) -> list[str]:
+    """``--stain -x:45`` and ``--up -y`` as ``--stain=-x:45``: argparse would take a value that
+    starts with '-' for an option."""
+    argv, out = list(argv), []
+    while argv:
+        arg = argv.pop(0)
+        if arg == "--":
+            return out + [arg] + argv
+        if arg in ("--stain", "--up") and argv and re.match(r"-([xyz]|\d|\.\d)", argv[0]):
+            arg = f"{arg}={argv.pop(0)}"
+        out.append(arg)
+    return out
+
+
+@contextlib.contextmanager
+def _hangup_as_interrupt():
+    """SIGHUP (the terminal closed) raises KeyboardInterrupt, as Ctrl-C does, so the cleanup
+    runs: no half-written file, no meshcat server left. Main thread only; under ``nohup``
+    (SIGHUP ignored) it stays ignored."""
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGHUP) == signal.SIG_IGN:
+        yield
+        return
+    previous = signal.signal(signal.SIGHUP, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGHUP, previous)
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     print(f"mavac: warning: {message}", file=sys.stderr)
 
@@ -287,14 +429,14 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 def main(argv=None) -> int:
     """Entry point of the ``mavac`` console script; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
-    with warnings.catch_warnings():
+    args = parser.parse_args(_signed_values(sys.argv[1:] if argv is None else argv))
+    with warnings.catch_warnings(), _hangup_as_interrupt():
         warnings.simplefilter("always", UserWarning)
         warnings.showwarning = _show_warning
         try:
             return args.func(args)
-        except (ValueError, TypeError) as exc:
-            print(f"mavac {args.command}: error: {exc}", file=sys.stderr)
+        except (ValueError, TypeError, OSError) as exc:
+            print(f"mavac {args.command}: error: {_with_flag(str(exc))}", file=sys.stderr)
             return 1
         except KeyboardInterrupt:
             print(f"mavac {args.command}: interrupted", file=sys.stderr)

@@ -34,10 +34,20 @@ def in_checkout() -> bool:
     return (ROOT / "pyproject.toml").is_file() and (ROOT / "notebooks").is_dir()
 
 
+def env_folder(name: str) -> Path | None:
+    """The folder an environment variable names (None when unset); ValueError when it names a file."""
+    value = os.environ.get(name, "").strip()
+    if not value:
+        return None
+    path = Path(value).expanduser()
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{name}={value} is a file, not a folder; point it at a folder or unset it")
+    return path
+
+
 def user_output_dir() -> Path:
     """Folder the user chose for outputs: ``MAVAC_OUT``, else the current directory."""
-    out = os.environ.get("MAVAC_OUT", "").strip()
-    return Path(out).expanduser() if out else Path.cwd()
+    return env_folder("MAVAC_OUT") or Path.cwd()
 
 
 def output_root() -> Path:
@@ -77,12 +87,9 @@ def instances_dir() -> Path:
 def cache_dir() -> Path:
     """On-disk cache for expensive stages: ``MAVAC_CACHE``, else ``build/cache`` in a checkout,
     else the user's cache folder (``$XDG_CACHE_HOME/mavac`` or ``~/.cache/mavac``)."""
-    env = os.environ.get("MAVAC_CACHE", "").strip()
-    if env:
-        path = Path(env).expanduser()
-    elif in_checkout():
-        path = BUILD_DIR / "cache"
-    else:
-        path = Path(os.environ.get("XDG_CACHE_HOME", "") or Path.home() / ".cache") / "mavac"
+    path = env_folder("MAVAC_CACHE")
+    if path is None:
+        path = BUILD_DIR / "cache" if in_checkout() else \
+            Path(os.environ.get("XDG_CACHE_HOME", "") or Path.home() / ".cache") / "mavac"
     path.mkdir(parents=True, exist_ok=True)
     return path

@@ -93,6 +93,14 @@ def atomic_path(path):
         _remove_if_empty(tmp.parent)
 
 
+@contextlib.contextmanager
+def atomic_paths(*paths):
+    """:func:`atomic_path` for several files written together: yield their temporaries and rename
+    them all at the end, so an interrupt never leaves a new file beside an old one."""
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(atomic_path(p)) for p in paths]
+
+
 def write_csv(df, path, **kwargs) -> Path:
     """Write a pandas DataFrame to CSV atomically (no index, fixed float format)."""
     if not callable(getattr(df, "to_csv", None)):
@@ -112,8 +120,9 @@ def write_text(text: str, path) -> Path:
 
 
 def write_json(obj, path) -> Path:
-    """Write JSON atomically (sorted keys, so the same data gives the same bytes)."""
-    return write_text(json.dumps(obj, indent=2, sort_keys=True), path)
+    """Write JSON atomically (sorted keys, so the same data gives the same bytes); ValueError
+    for an infinite or NaN number, which JSON cannot hold (write None and say why instead)."""
+    return write_text(json.dumps(obj, indent=2, sort_keys=True, allow_nan=False), path)
 
 
 def savefig(fig, path, dpi: int = 120) -> Path:

@@ -16,7 +16,7 @@ from joblib import Parallel, delayed
 from threadpoolctl import ThreadpoolController
 from tqdm.auto import tqdm
 
-from .validate import check_int
+from .validate import check_callable, check_int, check_sequence
 
 
 @functools.lru_cache(maxsize=1)
@@ -50,7 +50,8 @@ def map_trials(fn: Callable, items: Iterable, *, n_jobs: int | None = None, back
     progress : bool
         Show a tqdm progress bar.
     """
-    items: Sequence = list(items)
+    check_callable("fn", fn, "of one item")
+    items: Sequence = check_sequence("items", items)
     if n_jobs is None:
         env = os.environ.get("MAVAC_JOBS", "1")
         try:

@@ -16,10 +16,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .seeding import MAX_SEED
 from .validate import CheckedFields, check_positive, check_range, ranged
 
 
 # ---- MAVAC camera (read by mavac.vision.camera and mavac.vision.visibility) ----
+
+
+#: Most experiments a GPR run or a random search may take: each is a simulated scrubbing run
+#: (seconds), and 100 times the default budget is far beyond Kabir's tens (Sec. IX-C).
+MAX_EXPERIMENTS = 10_000
 
 
 @dataclass(frozen=True)
@@ -167,8 +173,9 @@ class GPRParams(CheckedFields):
     # With 2 points per axis run the 2^(5-1) resolution-V half fraction (16 points + centre)
     # instead of the full 32 (ours; classic fractional factorial screening design).
     half_fraction: bool = True
-    # Experiment budget (exploration included); the run stops there, feasible or not. Ours.
-    max_experiments: int = ranged(100, ge=1)
+    # Experiment budget (exploration included); the run stops there, feasible or not. Ours;
+    # at most MAX_EXPERIMENTS.
+    max_experiments: int = ranged(100, ge=1, le=MAX_EXPERIMENTS)
     # Candidate points per iteration (seeded Sobol, plus local ones around the incumbent). Ours.
     # At most 2^20: above, one GP prediction per iteration needs gigabytes.
     n_candidates: int = ranged(2048, ge=16, le=2**20)
@@ -178,7 +185,7 @@ class GPRParams(CheckedFields):
     # ``patience`` exploitation experiments, or the current answer is chosen again. Ours.
     tol: float = ranged(0.005, ge=0.0)
     patience: int = ranged(20, ge=1)
-    seed: int = ranged(0, ge=0)
+    seed: int = ranged(0, ge=0, le=MAX_SEED)
 
     def __post_init__(self):
         super().__post_init__()
@@ -391,9 +398,10 @@ class SetupPlannerParams(CheckedFields):
     iess_prob: float = ranged(0.9, gt=0.0, lt=1.0)
     # Kabir, Table VI: fixed setup time for all setups, 0, 60 or 3000 s; Table V's Hyperboloid
     # and Sine node counts match the 60 s rows.
-    setup_time: float = ranged(60.0, ge=0.0)
+    # Ours: at most 10^6 s (11.6 days), so that a plan's cost is a finite sum.
+    setup_time: float = ranged(60.0, ge=0.0, le=1e6)
     # Seed of Algorithm 5's random draws (ours).
-    seed: int = ranged(0, ge=0)
+    seed: int = ranged(0, ge=0, le=MAX_SEED)
     # Ours: DFBnB searches the instance reduced by mavac.planning.reduction (same optimum, a
     # smaller tree). False is the paper's search over every candidate, whose nodes Tables V-VII
     # count.
@@ -467,7 +475,8 @@ class Visibility(CheckedFields):
     spot_radius_factor: float = ranged(30.0, gt=1.0)
     # Absolute radius, m, for every viewpoint; None = the factors above. The authors' code uses
     # 10 (will-44/cleaning, script/class_fov_emulator.py, get_visible_point_pyramid).
-    radius: float | None = ranged(None, gt=0.0)
+    # At most 1,000 km: far beyond any machine, and spherical flipping overflows near 1e308.
+    radius: float | None = ranged(None, gt=0.0, le=1e6)
     # Point set HPR runs on at guard views: "surface" = all of S (Fig. 3 shows HPR points outside
     # the pyramid), "fov" = only the points in the FOV (see mavac.vision.visibility).
     hpr_input: str = ranged("surface", choices=HPR_INPUTS)
@@ -515,7 +524,7 @@ class ReachabilityMapParams(CheckedFields):
     # 200k x 128 leaves < 10 % of the cells that batched IK reaches unmarked (UR10, 5 cm).
     n_samples: int = ranged(200_000, ge=1)
     n_rotations: int = ranged(128, ge=1)
-    seed: int = ranged(0, ge=0)
+    seed: int = ranged(0, ge=0, le=MAX_SEED)
 
 
 @dataclass(frozen=True)
@@ -603,7 +612,7 @@ class InspectionParams(CheckedFields):
     # dust heaps are 10 cm apart, S is twice as fine).
     surface_spacing: float = ranged(0.05, gt=0.0)
     # Seed of the surface sampling, the spot jitter, IK restarts and RRT-Connect.
-    seed: int = ranged(0, ge=0)
+    seed: int = ranged(0, ge=0, le=MAX_SEED)
     camera: CameraParams = CameraParams()
     reach: ReachabilityMapParams = ReachabilityMapParams()
     spot: SpotParams = SpotParams()
@@ -831,7 +840,7 @@ class SetupPlanParams(CheckedFields):
     # Kabir, Table I / Sec. IX-A2: CA_XY worked best.
     variant: str = ranged("CA_XY", choices=SAMPLING_VARIANTS)
     # Seed of random sampling (ours).
-    seed: int = ranged(0, ge=0)
+    seed: int = ranged(0, ge=0, le=MAX_SEED)
     # Kabir, eq. 1 with t_e from a simple model (ours): t_e = sum(area x passes) / rate, rate =
     # 1e-3 m^2/s (a 20 mm wide tool sweeping 5 cm/s); the paper gives no rate for the Puma.
     cleaning_rate: float = ranged(1.0e-3, gt=0.0)

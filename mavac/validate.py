@@ -159,6 +159,22 @@ def check_instance(name: str, value, cls):
     return value
 
 
+def check_bool(name: str, value) -> bool:
+    """``value`` is a bool (``numpy.bool_`` too), not a string or a number standing for one."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterTypeError(f"{name} must be True or False, got {value!r} ({_type_name(value)})")
+    return bool(value)
+
+
+def check_sequence(name: str, value) -> list:
+    """``value`` is a list, tuple or other iterable of items (not a string, whose characters
+    would be taken for items); returned as a list."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, typing.Iterable):
+        raise ParameterTypeError(f"{name} must be a sequence such as a list or tuple, got {value!r} "
+                                 f"({_type_name(value)})")
+    return list(value)
+
+
 def check_callable(name: str, value, signature: str):
     """``value`` is callable; ``signature`` says what it is called with, for the message."""
     if not callable(value):

@@ -514,9 +514,56 @@ def _cases_process():
     ]
 
 
+def _cases_issue33():
+    """The command line's input audit (issue 33), at the API the command line calls."""
+    from mavac.inspection.inspection_plan import surface_elements
+
+    big = trimesh.creation.box(extents=[1.2, 0.6, 0.9])
+    return [
+        refuse("accepted", "SetupPlanParams-seed-2**70", lambda: P.SetupPlanParams(seed=2**70), ValueError, "seed"),
+        refuse("accepted", "InspectionParams-seed-2**70", lambda: P.InspectionParams(seed=2**70), ValueError, "seed"),
+        refuse("wrong", "SetupPlannerParams-setup_time-1e308", lambda: P.SetupPlannerParams(setup_time=1e308),
+               ValueError, "setup_time"),
+        refuse("dependency", "Visibility-radius-1e308", lambda: P.Visibility(radius=1e308), ValueError, "radius"),
+        refuse("hang", "surface_elements-spacing-3mm", lambda: surface_elements(big, 0.003, 0), ValueError,
+               "surface elements"),
+        *_cases_issue33_api(),
+    ]
+
+
+def _cases_issue33_api():
+    """Type checks of the Python entry points the audit found missing."""
+    from mavac.cleaning.trial import run_trial
+    from mavac.experiments.mavac_online import run_trials
+    from mavac.geometry.machines import load_machine
+    from mavac.parallel import map_trials
+    from mavac.scrubbing.gpr import random_search
+    from mavac.scrubbing.run import run_part
+
+    def trial(plan, **kw):
+        return run_trial(load_machine("test_bench"), plan, **kw)
+
+    return [
+        refuse("unnamed", "run_trial-plan-None", lambda: trial(None), TypeError, "plan"),
+        refuse("unnamed", "run_trial-plan-str", lambda: trial("plan"), TypeError, "plan"),
+        refuse("unnamed", "run_trial-robot-str", lambda: trial(None, robot="x"), TypeError, "robot"),
+        refuse("unnamed", "run_part-teapot", lambda: run_part("teapot", fast=True), ValueError, "name"),
+        refuse("unnamed", "run_part-42", lambda: run_part(42, fast=True), TypeError, "name"),
+        refuse("accepted", "run_part-fast-str", lambda: run_part("bowl", fast="no"), TypeError, "fast"),
+        refuse("accepted", "run_trials-trials-1.5", lambda: run_trials(trials=1.5), ValueError, "trials"),
+        refuse("accepted", "run_trials-trials--3", lambda: run_trials(trials=-3), ValueError, "trials"),
+        refuse("hang", "run_trials-trials-1e12", lambda: run_trials(trials=10**12), ValueError, "trials"),
+        refuse("wrong", "run_trials-scenes-str", lambda: run_trials(scenes="test_bench"), TypeError, "scenes"),
+        refuse("unnamed", "map_trials-fn-None", lambda: map_trials(None, [1], progress=False), TypeError, r"\bfn\b"),
+        refuse("unnamed", "map_trials-items-5", lambda: map_trials(abs, 5, progress=False), TypeError, "items"),
+        refuse("hang", "random_search-budget-1e12", lambda: random_search(
+            _experiment_returning(0.5), _gpr_params(), budget=10**12), ValueError, "budget"),
+    ]
+
+
 def hand_written_cases() -> list[Case]:
     return (_cases_wrong() + _cases_dependency() + _cases_unnamed() + _cases_accepted() + _cases_stain_marking()
-            + _cases_hang() + _cases_process())
+            + _cases_hang() + _cases_process() + _cases_issue33())
 
 
 # ---- generated: every field of every parameter dataclass ----

@@ -1,7 +1,10 @@
 """Each subcommand of the ``mavac`` command line on small procedural meshes (fast options)."""
 
+import argparse
 import json
+import os
 import subprocess
+from pathlib import Path
 import sys
 
 import numpy as np
@@ -42,7 +45,7 @@ def test_inspect_writes_a_plan_that_names_its_visibility(files, tmp_path, capsys
     code, out, err = run(["inspect", str(files / "cabinet.stl"), "--units", "mm", "--fast", "--quiet",
                           "--out", str(tmp_path / "plan.html")], capsys)
     assert code == 0, err
-    plan = json.loads((tmp_path / "cabinet_plan.json").read_text())  # beside the HTML page
+    plan = json.loads((tmp_path / "plan.json").read_text())  # the HTML page's name
     assert plan["visibility"] == "raycast"
     assert plan["params"]["visibility"]["method"] == "raycast"
     assert 0.0 < plan["C"] <= 1.0 and plan["poses"] and len(plan["poses"][0]["q"]) == 6
@@ -69,6 +72,11 @@ def test_inspect_with_hpr_and_default_output_folder(files, tmp_path, capsys, mon
     (["reach", "{cabinet}", "--units", "mm", "--spacing", "-0.1"], "surface_spacing must be in"),
     (["setups", "{dome}", "--units", "mm", "--stain", "left:3"], "stain spec 'left:3' not understood"),
     (["setups", "{dome}", "--units", "mm", "--stain", "sphere:500,500,500,1"], "picked no face"),
+    (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--setup-time", "1e308"], "setup_time must be in"),
+    (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--seed", str(2**70)], "seed must be in"),
+    (["inspect", "{cabinet}", "--units", "mm", "--visibility", "hpr", "--hpr-radius", "1e308"], "radius must be in"),
+    (["inspect", "{cabinet}", "--units", "mm", "--spacing", "0.003"], "surface elements"),
+    (["setups", "{dome}", "--units", "mm", "--stain", "up:60", "--t-max", "5"], "--t-max applies only"),
 ])
 def test_bad_input_exits_1_with_the_reason_and_no_traceback(files, tmp_path, capsys, argv, message):
     paths = {"cabinet": str(files / "cabinet.stl"), "dome": str(files / "dome.ply"),
@@ -86,7 +94,7 @@ def test_setups_plans_a_stained_part(files, tmp_path, capsys):
     code, out, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--passes", "2",
                           "--quiet", "--out", str(tmp_path / "dome.html")], capsys)
     assert code == 0, err
-    plan = json.loads((tmp_path / "dome_setups.json").read_text())
+    plan = json.loads((tmp_path / "dome.json").read_text())
     assert plan["status"] == "optimal" and plan["setups"] and plan["method"] == "auto"
     assert plan["certificate_cost_s"] == pytest.approx(plan["cost_s"]) == pytest.approx(plan["certificate_bound_s"])
     assert plan["certificate_proof"] in ("reduction", "enumeration", "milp") and "proven optimal" in out
@@ -100,7 +108,7 @@ def test_setups_method_dfbnb_is_the_papers_search_without_a_certificate(files, t
     code, out, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
                           "--method", "dfbnb", "--out", str(tmp_path / "dome.html")], capsys)
     assert code == 0, err
-    plan = json.loads((tmp_path / "dome_setups.json").read_text())
+    plan = json.loads((tmp_path / "dome.json").read_text())
     assert plan["method"] == "dfbnb" and plan["certificate_cost_s"] is None and plan["node_expansions"] > 0
     assert "proven" not in out
 
@@ -112,14 +120,14 @@ def test_setups_from_painted_colours_subdivides_large_patches(files, tmp_path, c
     assert "larger than the tool tip" not in err  # subdivided below 1.5 cm^2 first
     code, out, err = run(["setups", str(files / "painted.ply"), "--stain", "colors", "--quiet",
                           "--out", str(tmp_path / "q.html")], capsys)
-    assert code == 0 and "mavac: warning: " in err and "larger than the tool tip" in err
+    assert code == 0 and "warning: " in out and "larger than the tool tip" in out  # in the summary, once
 
 
 def test_reach_writes_a_heat_map_and_a_csv(files, tmp_path, capsys):
     code, out, err = run(["reach", str(files / "cabinet.stl"), "--units", "mm", "--fast", "--quiet",
                           "--out", str(tmp_path / "reach.html")], capsys)
     assert code == 0, err
-    df = pd.read_csv(tmp_path / "cabinet_reach.csv")
+    df = pd.read_csv(tmp_path / "reach.csv")  # the HTML page's name
     assert {"x", "y", "z", "reached", "visible", "maneuverability", "score", "best_spot", "q1", "q6"} <= set(df)
     assert df.score.between(0, 1).all() and (df.score > 0).any()
     assert ((df.score > 0) <= (df.reached & df.visible)).all()
@@ -156,3 +164,195 @@ def test_python_dash_m_runs_the_command_line(files, tmp_path):
     assert done.returncode == 1 and "pass --units mm" in done.stderr and "Traceback" not in done.stderr
     assert "mavac" in subprocess.run([sys.executable, "-m", "mavac", "--version"], capture_output=True,
                                      text=True).stdout
+
+
+# ---- issue 33: the command line's input handling -------------------------------------------------
+
+def _parsed(monkeypatch, argv) -> argparse.Namespace:
+    """The namespace ``main`` hands a command (the command itself replaced by a recorder)."""
+    seen = {}
+    for name in ("cmd_inspect", "cmd_setups", "cmd_reach"):
+        monkeypatch.setattr(cli, name, lambda args: seen.setdefault("args", args) and 0)
+    assert cli.main(argv) == 0
+    return seen["args"]
+
+
+@pytest.mark.parametrize("value", ["+x:45", "-x:45", "-y", "-1,0,0:45", "up:30,down:30", "x:10,-z:20"])
+def test_every_stain_form_reaches_the_command(monkeypatch, value):
+    for argv in (["setups", "p.stl", "--stain", value], ["setups", "p.stl", f"--stain={value}"]):
+        assert _parsed(monkeypatch, argv).stain == value
+
+
+@pytest.mark.parametrize("value", ["+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"])
+def test_up_takes_every_signed_axis(monkeypatch, value):
+    assert _parsed(monkeypatch, ["inspect", "m.stl", "--up", value]).up == value
+
+
+def test_a_part_turned_so_its_up_is_minus_y_plans_as_the_original(tmp_path, capsys):
+    block = trimesh.creation.box([0.10, 0.06, 0.04])
+    block.export(tmp_path / "block.ply")
+    turned = block.copy()
+    turned.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))  # z -> -y
+    assert np.allclose(turned.face_normals[np.argmax(block.face_normals[:, 2])], [0, -1, 0])
+    turned.export(tmp_path / "turned.ply")
+    plans = []
+    for name, up in (("block", "z"), ("turned", "-y")):
+        code, _, err = run(["setups", str(tmp_path / f"{name}.ply"), "--stain", "up:30", "--up", up, "--quiet",
+                            "--out", str(tmp_path / f"{name}_out.html")], capsys)
+        assert code == 0, err
+        plan = json.loads((tmp_path / f"{name}_out.json").read_text())
+        plans.append({k: v for k, v in plan.items() if k != "part"})
+    assert plans[0] == plans[1]
+
+
+@pytest.mark.parametrize("option", [["--P-s", "0.9"], ["--P-g", "0.9"], ["--no-nos"]])
+def test_reach_refuses_the_options_it_does_not_use(option, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["reach", "m.stl", *option])
+    assert exit_.value.code == 2 and "unrecognized arguments" in capsys.readouterr().err
+
+
+def test_hpr_radius_without_hpr_is_refused(files, tmp_path, capsys):
+    code, _, err = run(["inspect", str(files / "cabinet.stl"), "--units", "mm", "--hpr-radius", "3",
+                        "--out", str(tmp_path / "x.html")], capsys)
+    assert code == 1 and "--hpr-radius" in err and "--visibility hpr" in err
+
+
+def test_companion_files_follow_the_out_stem(files, tmp_path, capsys):
+    code, _, err = run(["reach", str(files / "cabinet.stl"), "--units", "mm", "--fast", "--quiet",
+                        "--out", str(tmp_path / "heat.html")], capsys)
+    assert code == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["heat.csv", "heat.html"]
+
+
+@pytest.fixture
+def no_compute(monkeypatch):
+    """Any computation fails the test: output paths must be checked before it starts."""
+    import mavac.geometry.mesh as mesh_module
+
+    def computed(*args, **kwargs):
+        raise AssertionError("computed before refusing the output path")
+
+    monkeypatch.setattr(mesh_module, "load_mesh", computed)
+
+
+@pytest.mark.parametrize("case", ["input", "same", "empty", "directory", "under_file", "readonly", "env_out",
+                                  "env_cache"])
+def test_bad_output_paths_are_refused_before_computing(files, tmp_path, capsys, monkeypatch, no_compute, case):
+    mesh = str(files / "cabinet.stl")
+    (tmp_path / "plain").write_text("a file")
+    readonly = tmp_path / "ro"
+    readonly.mkdir()
+    readonly.chmod(0o555)
+    out, extra, message = str(tmp_path / "x.html"), [], "--out"
+    if case == "input":
+        out, message = mesh, "is the input"
+    elif case == "same":
+        extra, message = ["--csv", out], "both --out and --csv"
+    elif case == "empty":
+        out, message = "", "--out is empty"
+    elif case == "directory":
+        out, message = str(tmp_path), "is a directory"
+    elif case == "under_file":
+        out, message = str(tmp_path / "plain" / "x.html"), "not a directory"
+    elif case == "readonly":
+        out, message = str(readonly / "x.html"), "cannot write"
+    elif case == "env_out":
+        monkeypatch.setenv("MAVAC_OUT", str(tmp_path / "plain"))
+        out, message = None, "MAVAC_OUT"
+    elif case == "env_cache":
+        monkeypatch.setenv("MAVAC_CACHE", str(tmp_path / "plain"))
+        message = "MAVAC_CACHE"
+    argv = ["reach", mesh, "--units", "mm", "--fast", "--quiet", *extra] + ([] if out is None else ["--out", out])
+    if case == "readonly" and os.access(readonly, os.W_OK):  # root writes anywhere: as the others see it
+        access = os.access
+        monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != readonly and access(path, mode))
+    try:
+        code, _, err = run(argv, capsys)
+    finally:
+        readonly.chmod(0o755)
+    assert code == 1 and message in err and "Traceback" not in err, err
+
+
+def test_an_interrupt_while_writing_keeps_the_old_outputs_together(files, tmp_path, capsys, monkeypatch):
+    from mavac.setups.setup_plan import SetupPlan
+
+    out, js = tmp_path / "d.html", tmp_path / "d.json"
+    out.write_text("old page")
+    js.write_text("old plan")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(SetupPlan, "to_html", interrupted)
+    code, _, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                        "--out", str(out)], capsys)
+    assert code == 130
+    assert (out.read_text(), js.read_text()) == ("old page", "old plan")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.html", "d.json"]
+
+
+def _strict_json(path):
+    def refuse(constant):
+        raise AssertionError(f"{constant} in {path}")
+    return json.loads(Path(path).read_text(), parse_constant=refuse)
+
+
+def test_a_search_that_finds_no_plan_exits_non_zero_with_strict_json(files, tmp_path, capsys):
+    code, out, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                          "--method", "dfbnb", "--t-max", "1e-9", "--out", str(tmp_path / "d.html")], capsys)
+    assert code == 3 and "NO SOLUTION" in out and "--t-max" in err, (out, err)
+    plan = _strict_json(tmp_path / "d.json")
+    assert plan["status"] == "timed_out" and plan["cost_s"] is None and not plan["setups"]
+
+
+@pytest.mark.parametrize("kind", ["pickled", "truncated", "garbage", "text", "directory", "npz"])
+def test_a_bad_intensity_file_names_the_option(files, tmp_path, capsys, kind):
+    bad = tmp_path / "in" / ("i.npz" if kind == "npz" else "i.txt" if kind == "text" else "i.npy")
+    bad.parent.mkdir()
+    if kind == "pickled":
+        np.save(bad, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    elif kind == "truncated":
+        np.save(bad, np.full(642, 0.5))
+        bad.write_bytes(bad.read_bytes()[:200])
+    elif kind == "garbage":
+        bad.write_bytes(bytes(range(256)) * 4)
+    elif kind == "text":
+        bad.write_text("half\nfull\n")
+    elif kind == "directory":
+        bad.mkdir()
+    else:
+        np.savez(bad, a=np.full(642, 0.5))
+    code, _, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                        "--intensity", str(bad), "--out", str(tmp_path / "d.html")], capsys)
+    assert code == 1 and err.startswith("mavac setups: error: --intensity") and "Traceback" not in err, err
+
+
+def test_the_tool_tip_warning_is_printed_once(files, tmp_path, capsys):
+    code, out, err = run(["setups", str(files / "painted.ply"), "--stain", "colors", "--quiet",
+                          "--out", str(tmp_path / "q.html")], capsys)
+    assert code == 0 and (out + err).count("larger than the tool tip") == 1, (out, err)
+
+
+def test_sighup_is_an_interrupt(tmp_path):
+    """A closed terminal (SIGHUP) ends the command as Ctrl-C does: status 130, cleanup run."""
+    code = ("import os, signal, sys, time\nfrom mavac import cli\n"
+            "def hung_up(args):\n    os.kill(os.getpid(), signal.SIGHUP)\n    time.sleep(30)\n"
+            "cli.cmd_setups = hung_up\n"
+            "sys.exit(cli.main(['setups', 'p.stl', '--stain', 'up:30']))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert done.returncode == 130 and "interrupted" in done.stderr, (done.returncode, done.stderr)
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["inspect", "{cabinet}", "--visibility", "hpr", "--hpr-radius", "1e308"], "--hpr-radius"),
+    (["inspect", "{cabinet}", "--spacing", "0.003"], "--spacing"),
+    (["inspect", "{cabinet}", "--P-g", "2"], "--P-g"),
+    (["setups", "{dome}", "--stain", "up:60", "--setup-time", "1e308"], "--setup-time"),
+    (["setups", "{dome}", "--stain", "up:60", "--seed", str(2**70)], "--seed"),
+])
+def test_a_refused_parameter_is_named_by_its_flag(files, tmp_path, capsys, argv, flag):
+    paths = {"cabinet": str(files / "cabinet.stl"), "dome": str(files / "dome.ply")}
+    argv = [a.format(**paths) for a in argv] + ["--units", "mm", "--quiet", "--out", str(tmp_path / "x.html")]
+    code, _, err = run(argv, capsys)
+    assert code == 1 and err.startswith(f"mavac {argv[0]}: error: {flag}: "), err

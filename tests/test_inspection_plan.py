@@ -253,3 +253,18 @@ def test_the_authors_offline_settings_run_through_the_pipeline(robot):
     # the same plan with the radius as a factor of the farthest distance counts other elements
     factor = plan_inspection(_box_machine(), robot=robot, params=params.with_visibility(Visibility("hpr")))
     assert not np.array_equal(factor.visible, authors.visible)
+
+
+@pytest.mark.parametrize("shift", [10.0, 10_000.0])
+def test_moving_the_machine_far_from_the_origin_changes_no_result(plan, robot, shift):
+    """Where the file puts the machine changes no result (issue 33: C fell from 0.79 to 0.67 at
+    10 km, vertices cast to float32 losing ~1 mm): machine_from_mesh moves it by whole metres
+    to the origin, and ray casting and guard voxels are relative to the mesh."""
+    from mavac.geometry.machines import machine_from_mesh
+
+    mesh = _box_machine().mesh.copy().apply_translation([shift, -shift, 0.0])
+    machine = machine_from_mesh(mesh, name="pocket_box")
+    np.testing.assert_array_equal(machine.file_offset, [shift, -shift, 0.0])
+    moved = plan_inspection(machine, robot=robot, params=FAST)
+    assert moved.C == pytest.approx(plan.C, abs=1e-9) and moved.O == pytest.approx(plan.O, abs=1e-9)
+    np.testing.assert_allclose(moved.poses, plan.poses, atol=1e-9)

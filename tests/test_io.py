@@ -68,3 +68,12 @@ def test_a_live_writers_temporary_is_not_cleaned(tmp_path):
     finally:
         end(proc)
     assert not (tmp_path / "slow.csv").exists()
+
+
+def test_write_json_refuses_infinity_and_nan(tmp_path):
+    import math
+
+    for value in (math.inf, math.nan):
+        with pytest.raises(ValueError, match="JSON"):
+            write_json({"cost": value}, tmp_path / "x.json")
+    assert not list(tmp_path.iterdir())

@@ -130,7 +130,8 @@ def test_machine_from_mesh_puts_it_on_the_floor():
     box.apply_translation([1.0, 2.0, 5.0])
     machine = machine_from_mesh(box, name="crate")
     assert machine.mesh.bounds[0, 2] == pytest.approx(0.0)
-    np.testing.assert_allclose(machine.mesh.bounds[0, :2], [0.8, 1.9])
+    np.testing.assert_allclose(machine.mesh.bounds[0, :2], [-0.2, -0.1])  # moved by whole metres
+    np.testing.assert_allclose(machine.file_offset, [1.0, 2.0, 4.85])
     assert len(machine.footprint) == 4
     assert box.bounds[0, 2] == pytest.approx(4.85)  # input untouched
 

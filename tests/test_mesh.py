@@ -177,7 +177,8 @@ def test_stl_triangle_soup_is_merged_without_warning(tmp_path):
 def test_repair_mesh_counts_on_a_clean_mesh_are_zero():
     counts = repair_mesh(trimesh.creation.icosphere())
     assert counts == {"degenerate_faces": 0, "duplicate_faces": 0, "merged_vertices": 0,
-                      "unreferenced_vertices": 0, "flipped_faces": 0, "inverted": False}
+                      "unreferenced_vertices": 0, "flipped_faces": 0, "inverted": False,
+                      "watertight_as_loaded": True}
 
 
 def test_inconsistent_winding_is_flipped_and_reported(tmp_path):
@@ -212,3 +213,42 @@ def test_open_mesh_keeps_the_majority_orientation_and_warns_about_normals(tmp_pa
     centre = mesh.vertices.mean(axis=0)
     inward = np.einsum("ij,ij->i", mesh.face_normals, mesh.triangles_center - centre) < 0
     assert inward.all()
+
+
+@pytest.mark.parametrize("meter", ["metre", "0", "-0.001", "nan"])
+def test_a_bad_collada_unit_is_refused_not_read_as_metres(tmp_path, meter):
+    path = _dae_with_unit(tmp_path / "bad.dae", 1.5, 1.0)
+    path.write_text(path.read_text().replace('meter="1"', f'meter="{meter}"').replace('meter="1.0"', f'meter="{meter}"'))
+    assert f'meter="{meter}"' in path.read_text()
+    with pytest.raises(ValueError, match=r"<unit meter=.*pass units="):
+        load_mesh(path)
+    assert _load_quietly(path, units="m").extents.max() == pytest.approx(1.5)  # units= overrides it
+
+
+def test_a_malformed_collada_file_is_not_blamed_on_pycollada(tmp_path):
+    path = _dae_with_unit(tmp_path / "cut.dae", 1.5, 1.0)
+    path.write_text(path.read_text()[:600])
+    with pytest.raises(ValueError, match="could not be read as a mesh") as error:
+        load_mesh(path)
+    assert "pycollada" not in str(error.value)
+
+
+def test_no_watertight_warning_when_our_own_repair_opened_the_mesh(tmp_path):
+    """A closed mesh with a zero-area sliver closing a T-junction: removing the sliver opens it."""
+    box = trimesh.creation.box([1.0, 1.0, 1.0])
+    v, f = list(map(tuple, box.vertices)), [tuple(t) for t in box.faces]
+    (a, b, c), = [t for t in f if t == tuple(box.faces[0])]
+    d_face = next(t for t in f if t != (a, b, c) and {a, b} <= set(t))
+    m = len(v)
+    v.append(tuple((np.array(v[a]) + np.array(v[b])) / 2))
+    f.remove((a, b, c))
+    f += [(a, m, c), (m, b, c), (a, b, m)] if (a, b) in [(d_face[i], d_face[(i + 1) % 3]) for i in range(3)] \
+        else [(a, m, c), (m, b, c), (b, a, m)]
+    mesh = trimesh.Trimesh(np.array(v), np.array(f), process=False)
+    assert mesh.is_watertight
+    mesh.export(tmp_path / "sliver.ply")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        load_mesh(tmp_path / "sliver.ply")
+    assert any("degenerate" in str(w.message) for w in seen)
+    assert not any("not watertight" in str(w.message) for w in seen), [str(w.message) for w in seen]

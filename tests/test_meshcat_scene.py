@@ -2,6 +2,7 @@
 
 import os
 import signal
+import threading
 
 import pytest
 from _children import IN_MESHCAT_SCENE, alive, end, gone_within, start, wait_line
@@ -31,3 +32,33 @@ def test_handler_is_restored_after_the_scene():
     with sigterm_as_interrupt():
         assert signal.getsignal(signal.SIGTERM) is not before
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
+    """A SIGINT that arrives while ``meshcat.Visualizer()`` starts its server (before the block
+    that shuts it down) must not leave the server running."""
+    import meshcat
+
+    from mavac.viz import meshcat_scene as ms
+
+    servers, real = [], meshcat.Visualizer
+
+    def starting(*args, **kwargs):
+        vis = real(*args, **kwargs)
+        servers.append(vis.window.server_proc)
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C just as the server is up
+        return vis
+
+    monkeypatch.setattr(meshcat, "Visualizer", starting)
+    idle = threading.Event()  # another thread, which a process-wide signal may be handed to
+    threading.Thread(target=idle.wait, daemon=True).start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with ms.scene():
+                pass
+        assert servers and servers[0].poll() is not None
+    finally:
+        idle.set()
+        for proc in servers:
+            if proc.poll() is None:
+                proc.kill()

@@ -93,7 +93,7 @@ def test_parse_stain(spec, key):
 
 
 def test_parse_stain_scales_lengths_and_combines():
-    kw = S.parse_stain("down:20+sphere:10,0,0,5", scale=0.001)
+    kw = S.parse_stain("down:20,sphere:10,0,0,5", scale=0.001)
     assert kw["cone"] == ((0, 0, -1), 20.0)
     np.testing.assert_allclose(kw["sphere"][0], [0.01, 0, 0])
     assert kw["sphere"][1] == pytest.approx(0.005)
@@ -101,3 +101,46 @@ def test_parse_stain_scales_lengths_and_combines():
         S.parse_stain("left:5")
     with pytest.raises(ValueError, match="not understood"):
         S.parse_stain("box:1,2,3")
+
+
+# Every form ``mavac setups --help`` shows, joined with ',' (issue 33: '+x:45' was split on '+').
+@pytest.mark.parametrize("spec, key", [
+    ("up:30", "cone"), ("down:45", "cone"), ("+x:45", "cone"), ("-x:45", "cone"), ("+y", "cone"),
+    ("-y:10", "cone"), ("+z:5", "cone"), ("-z:5", "cone"), ("x:45", "cone"), ("y", "cone"), ("z:20", "cone"),
+    ("0,0,1:30", "cone"), ("-1,0,0", "cone"), ("box:0,0,0,1,1,1", "box"), ("sphere:0,0,0,1", "sphere"),
+    ("colors", "colors"), ("colors:#503c1e", "colors"), ("faces:0,1,2", "faces"),
+    ("up:30,box:0,0,0,1,1,1", "box"), ("box:0,0,0,1,1,1,-x:45", "cone"), ("faces:0,1,0,0,1:30", "cone"),
+    ("sphere:0,0,0,1,0,0,1:30", "cone"), ("+x:45,faces:3,4", "faces")])
+def test_parse_stain_every_form_of_the_help(spec, key):
+    assert key in S.parse_stain(spec)
+
+
+def test_parse_stain_signs_are_directions_not_joins():
+    assert S.parse_stain("+x:45")["cone"] == ((1, 0, 0), 45.0)
+    assert S.parse_stain("-x:45")["cone"] == ((-1, 0, 0), 45.0)
+    assert S.parse_stain("x")["cone"] == ((1, 0, 0), 30.0)
+    kw = S.parse_stain("faces:0,1,0,0,1:30")
+    assert kw["faces"].tolist() == [0, 1] and kw["cone"] == ((0.0, 0.0, 1.0), 30.0)
+
+
+def test_cones_of_one_spec_are_united():
+    box = trimesh.creation.box([1, 1, 1])
+    up = S.mark_stain(box, **S.parse_stain("up:30"), name="b")
+    both = S.mark_stain(box, **S.parse_stain("up:30,down:30"), name="b")
+    assert len(both.stain_faces) == 2 * len(up.stain_faces) == 4
+    wide = S.mark_stain(box, **S.parse_stain("up:10,+x:60"), name="b")
+    assert len(wide.stain_faces) == 4
+    same = S.mark_stain(box, **S.parse_stain("up:10,up:60"), name="b")
+    assert len(same.stain_faces) == len(up.stain_faces)
+    # different kinds intersect: the top faces inside the box x > 0.2 (none of them: only corners)
+    kw = S.parse_stain("up:30,down:30,box:-1,-1,-1,1,1,0")
+    assert len(S.mark_stain(box, **kw, name="b").stain_faces) == 2  # the bottom only
+
+
+def test_parse_stain_refuses_huge_face_indices_and_old_plus_joins():
+    with pytest.raises(ValueError, match="faces"):
+        S.parse_stain("faces:" + "9" * 30)
+    with pytest.raises(ValueError, match="not understood.*','"):
+        S.parse_stain("up:30+box:0,0,0,1,1,1")
+    with pytest.raises(ValueError, match="colors"):
+        S.parse_stain("colors,colors:#000000")

@@ -269,3 +269,24 @@ def test_visible_each_is_the_diagonal_of_visible(walled_box):
         np.testing.assert_array_equal(visible_each(vis, pts, normals, views, scene=walled_box), np.diag(full))
     with pytest.raises(ValueError, match="viewpoints"):
         HPR.visible_each(pts, None, views[:2])
+
+
+@pytest.mark.parametrize("shift", [10.0, 10_000.0])
+def test_visibility_does_not_depend_on_where_the_mesh_sits(sphere_sample, shift):
+    mesh, pts, normals = sphere_sample
+    views = np.array([[1.0, 0.2, 0.1], [-0.8, 0.5, 0.3]])
+    here = VisibilityScene(mesh).visible(pts, normals, views)
+    there = VisibilityScene(mesh.copy().apply_translation([shift, shift, 0])).visible(pts + [shift, shift, 0],
+                                                                                      normals, views + [shift, shift, 0])
+    assert (here == there).all()
+
+
+def test_surface_sampling_does_not_depend_on_where_the_mesh_sits():
+    from mavac.geometry.surface import sample_surface
+
+    mesh = trimesh.creation.icosphere(3, radius=0.3)
+    here = sample_surface(mesh, 0.03, seed=0)
+    there = sample_surface(mesh.copy().apply_translation([1e4, 1e4, 0]), 0.03, seed=0)
+    np.testing.assert_allclose(there.points - [1e4, 1e4, 0], here.points, atol=1e-6)
+    assert (there.face_index == here.face_index).all()
+

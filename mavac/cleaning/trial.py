@@ -35,7 +35,7 @@ from ..geometry.machines import Machine
 from ..geometry.transforms import se2_to_matrix
 from ..params import OnlineParams
 from ..robots.kinematics import fk
-from ..robots.models import ur10_mobile
+from ..robots.models import RobotModel, ur10_mobile
 from ..seeding import check_seed, int_seed, rng_for
 from ..sim.render import intrinsics_from_fov, mavac_T_opencv, render_rgbd
 from ..sim.world import SimWorld
@@ -369,16 +369,19 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     mavac.planning.rrt.PlanningTimeout
         If a planner's wall-time safety net fires (the result would depend on the load).
     """
+    from ..inspection.inspection_plan import InspectionPlan
+
     t0 = time.perf_counter()
     check_instance("machine", machine, Machine)
+    robot = ur10_mobile() if robot is None else check_instance("robot", robot, RobotModel)
     params = OnlineParams() if params is None else check_instance("params", params, OnlineParams)
     seed = check_seed(seed)
+    check_instance("plan", plan, InspectionPlan)
     heaps = heaps_for_trial(machine, params.dust, seed)
     if not len(heaps):
         return _empty_result(machine.name, seed, heaps, "no heaps: the machine has no upward-facing surface")
     if len(plan.poses) == 0:
         return _empty_result(machine.name, seed, heaps, "empty plan: no guard pose to inspect from")
-    robot = ur10_mobile() if robot is None else robot
     result = _empty_result(machine.name, seed, heaps, "")
     with SimWorld(time_step=params.time_step, seed=seed) as world:
         cell = build_cell(world, machine, robot, heaps, params, se2_to_matrix(*plan.poses[0, :3]))

@@ -30,10 +30,13 @@ from ..geometry.machines import load_machine
 from ..paper import paper_scalar, paper_values
 from ..parallel import map_trials
 from ..params import InspectionParams
+from ..validate import check_int, check_sequence
 from ..viz import meshcat_scene as ms
 from ..viz.plots import new_figure, plot_mesh, set_equal_3d
 from .mavac_offline import fast_params
 
+#: most trials per scene and reading: 100 times the paper's 10 (Table 2), each minutes of simulation
+MAX_TRIALS = 1_000
 #: the paper's two Table 2 tests: the test bench, and the sanding and milling machines together
 SCENES = ("test_bench", "sanding_milling")
 #: paper's Table 2 machine labels -> our scenes
@@ -89,7 +92,9 @@ def _trial(args) -> dict:
 def run_trials(*, scenes=SCENES, reading_names=readings.READINGS, trials: int = 10, fast: bool = False,
                n_jobs=None) -> list[dict]:
     """``trials`` trials per scene and reading (seed = trial number, so both readings clean the
-    same heap layouts); plans are made first, once each."""
+    same heap layouts; at most :data:`MAX_TRIALS`); plans are made first, once each."""
+    scenes, reading_names = check_sequence("scenes", scenes), check_sequence("reading_names", reading_names)
+    trials = check_int("trials", trials, 1, MAX_TRIALS)
     for scene in scenes:
         for reading in reading_names:
             offline_plan(scene, reading, fast=fast)

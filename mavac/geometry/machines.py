@@ -40,7 +40,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from ..tolerances import FLOOR_NORMAL_Z, FLOOR_TOLERANCE
 from ..validate import check_instance, check_points, check_positive, check_range
-from .mesh import check_mesh
+from .mesh import check_mesh, local_origin
 from .surface import sample_surface
 
 #: the three machines of the paper, one scene each (the offline notebooks 01-04 sweep these)
@@ -67,12 +67,16 @@ class Machine:
         Floor polygon (counter-clockwise) the mobile base must stay out of: the convex hull of
         the machine's shadow on the floor, so overhangs are included.
     notes : str
+    file_offset : (3,) float, metres
+        Where the machine frame's origin is in the mesh it was made from
+        (:func:`machine_from_mesh`): a point ``p`` of the machine is ``p + file_offset`` there.
     """
 
     name: str
     mesh: trimesh.Trimesh
     footprint: np.ndarray
     notes: str = field(default="")
+    file_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         check_mesh("mesh", self.mesh)
@@ -290,12 +294,16 @@ _NOTES = {
 def machine_from_mesh(mesh: trimesh.Trimesh, *, name: str = "custom", notes: str = "") -> Machine:
     """Wrap your own machine mesh (metres, z up, see :func:`mavac.geometry.mesh.load_mesh`).
 
-    The mesh is copied and lowered so its lowest point is on the floor (z = 0); x and y are
-    kept. The footprint is the convex hull of its floor shadow.
+    The mesh is copied, lowered so its lowest point is on the floor (z = 0), and moved by whole
+    metres in x and y so its centre is within half a metre of the origin
+    (:func:`mavac.geometry.mesh.local_origin`): the plan of a machine does not depend on where the
+    file put it, and a mesh already there keeps its x and y. ``Machine.file_offset`` is the move.
+    The footprint is the convex hull of its floor shadow.
     """
     copy = check_mesh("mesh", mesh).copy()
-    copy.apply_translation([0.0, 0.0, -copy.bounds[0, 2]])
-    return Machine(name, copy, footprint_from_mesh(copy), notes)
+    offset = local_origin(copy.vertices) + [0.0, 0.0, copy.bounds[0, 2]]
+    copy.apply_translation(-offset)
+    return Machine(name, copy, footprint_from_mesh(copy), notes, file_offset=offset)
 
 
 def _build(name: str) -> Machine:

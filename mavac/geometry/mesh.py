@@ -16,6 +16,8 @@ which it would fall in range.
 
 from __future__ import annotations
 
+import importlib.util
+import math
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -60,16 +62,25 @@ def units_in_range(extent_in_file_units: float, role=None) -> list[str]:
 
 
 def collada_unit(path) -> float | None:
-    """Metres per unit declared by a COLLADA file's ``<asset><unit meter="..."/>``, or None."""
+    """Metres per unit declared by a COLLADA file's ``<asset><unit meter="..."/>``, or None
+    (none declared, or XML the mesh reader will report); ValueError when the declared value is
+    not a positive number."""
     try:
         for _, elem in ET.iterparse(str(path), events=("start",)):
             tag = elem.tag.rsplit("}", 1)[-1]
             if tag == "unit" and elem.get("meter") is not None:
-                meter = float(elem.get("meter"))
-                return meter if np.isfinite(meter) and meter > 0 else None
+                text = elem.get("meter")
+                try:
+                    meter = float(text)
+                except ValueError:
+                    meter = math.nan
+                if not (np.isfinite(meter) and meter > 0):
+                    raise ValueError(f"{Path(path).name} declares <unit meter=\"{text}\">, not a positive "
+                                     "number of metres; pass units= (--units) to say the file's unit")
+                return meter
             if tag in ("library_geometries", "library_visual_scenes"):
                 return None  # <asset> comes first; stop before the bulk of the file
-    except (ET.ParseError, ValueError):
+    except ET.ParseError:
         return None
     return None
 
@@ -85,11 +96,26 @@ def _read(path: Path) -> trimesh.Trimesh:
     try:
         loaded = trimesh.load(str(path), force="mesh", process=False)
     except Exception as exc:  # the loaders raise many types; one clear message for all
-        hint = " (reading .dae needs the pycollada package)" if path.suffix.lower() == ".dae" else ""
+        hint = " (reading .dae needs the pycollada package)" if path.suffix.lower() == ".dae" and \
+            importlib.util.find_spec("collada") is None else ""
         raise ValueError(f"path {str(path)!r} could not be read as a mesh{hint}: {exc}") from exc
     if not isinstance(loaded, trimesh.Trimesh):
         raise ValueError(f"path {str(path)!r} holds no triangle mesh (got {type(loaded).__name__})")
     return loaded
+
+
+def local_origin(vertices) -> np.ndarray:
+    """Whole-metre point nearest the centre of ``vertices``' bounding box, on z = 0, (3,) float:
+    the origin of computations that must not depend on where the mesh sits in x and y.
+
+    Embree (Open3D ray casting) takes float32, ~1 mm apart at 10 km, so vertices and ray origins
+    are cast relative to it; voxel grids are anchored at it. Whole metres make moved copies of a
+    mesh give the same float32 values and cells, and leave a mesh centred within half a metre of
+    the world origin as it was.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    centre = np.round((v.min(axis=0) + v.max(axis=0)) / 2.0) if len(v) else np.zeros(3)
+    return np.array([centre[0], centre[1], 0.0])  # z = 0: machines stand on the floor
 
 
 def check_mesh(name: str, mesh) -> trimesh.Trimesh:
@@ -153,7 +179,8 @@ def repair_mesh(mesh: trimesh.Trimesh) -> dict:
     make the winding consistent.
 
     Works in place on ``mesh``. Returns the counts ``{"degenerate_faces", "duplicate_faces",
-    "merged_vertices", "unreferenced_vertices", "flipped_faces", "inverted"}``.
+    "merged_vertices", "unreferenced_vertices", "flipped_faces", "inverted"}`` and
+    ``"watertight_as_loaded"`` (coincident vertices merged, before any face was removed).
     ``flipped_faces`` were turned over (not removed) to agree with their neighbours; in each
     connected sheet the orientation most of its area already had is kept. ``inverted`` is True
     when a closed mesh was inside out and has been turned so its normals point outward.
@@ -161,6 +188,7 @@ def repair_mesh(mesh: trimesh.Trimesh) -> dict:
     n_vertices = len(mesh.vertices)
     mesh.merge_vertices()
     merged = n_vertices - len(mesh.vertices)
+    watertight_as_loaded = bool(mesh.is_watertight)  # before removing faces, which may open it
     keep = mesh.nondegenerate_faces()
     degenerate = int((~keep).sum())
     mesh.update_faces(keep)
@@ -180,12 +208,17 @@ def repair_mesh(mesh: trimesh.Trimesh) -> dict:
             inverted = True
     return {"degenerate_faces": degenerate, "duplicate_faces": duplicate,
             "merged_vertices": merged, "unreferenced_vertices": unreferenced,
-            "flipped_faces": flipped, "inverted": inverted}
+            "flipped_faces": flipped, "inverted": inverted, "watertight_as_loaded": watertight_as_loaded}
 
 
 def _resolve_units(path: Path, units):
     """Metres per unit and its name; COLLADA's own unit when ``units`` is None."""
-    declared = collada_unit(path) if path.suffix.lower() == ".dae" else None
+    try:
+        declared = collada_unit(path) if path.suffix.lower() == ".dae" else None
+    except ValueError:  # a broken declaration: an error unless units says the unit
+        if units is None:
+            raise
+        declared = None
     if units is None:
         scale = 1.0 if declared is None else declared
         return scale, _unit_name(scale)
@@ -230,7 +263,7 @@ def _warn_repairs(name: str, repairs: dict) -> None:
     if repairs["inverted"]:
         warnings.warn(f"{name}: closed mesh was inside out; turned all its faces so normals point outward",
                       stacklevel=3)
-    if not repairs["watertight"]:
+    if not repairs["watertight_as_loaded"]:  # not when removing degenerate faces opened it
         warnings.warn(f"{name}: mesh is not watertight (open boundary or non-manifold edges); accepted, but "
                       "inside/outside tests on it are unreliable", stacklevel=3)
 

@@ -7,7 +7,7 @@ A part exported from CAD has no stain and often large triangles, so this module
 
 * selects faces by an explicit mask or index list, a normal cone ("faces within 30 deg of up"),
   a box or a sphere (face centres), or the colours painted in the file (per-vertex or per-face);
-  several selectors are combined with AND;
+  selectors of one kind are united, different kinds intersected;
 * gives each stained face its passes from a constant or from an intensity in (0, 1]
   (1-3 passes in equal intensity bands, as :func:`mavac.geometry.parts.stain_from_field`);
 * warns when stained triangles are larger than the tool tip, and optionally splits them
@@ -34,8 +34,9 @@ from .parts import SYNTHETIC_MAX_FACE_AREA, Part, part_from_mesh
 #: largest patch area before a warning, m^2: Kabir IX-A, "less than 1.5 cm^2"
 TOOL_TIP_AREA = SYNTHETIC_MAX_FACE_AREA
 #: named directions for normal cones (``"up:30"``)
-DIRECTIONS = {"up": (0, 0, 1), "down": (0, 0, -1), "+x": (1, 0, 0), "-x": (-1, 0, 0),
-              "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+DIRECTIONS = {"up": (0, 0, 1), "down": (0, 0, -1), "+x": (1, 0, 0), "-x": (-1, 0, 0), "x": (1, 0, 0),
+              "+y": (0, 1, 0), "-y": (0, -1, 0), "y": (0, 1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1),
+              "z": (0, 0, 1)}
 
 
 def _mesh(mesh) -> trimesh.Trimesh:
@@ -210,8 +211,14 @@ def subdivide_faces(mesh, stained, max_area: float = TOOL_TIP_AREA, max_rounds: 
     return trimesh.Trimesh(vertices, faces, process=False), parent
 
 
+def _selectors(value) -> list:
+    """One cone, box or sphere (its first item a 3-vector), or a list of them, as a list."""
+    single = len(value) == 2 and len(value[0]) == 3 and all(np.isscalar(c) for c in value[0])
+    return [value] if single else list(value)
+
+
 def _selection(mesh, faces, cone, box, sphere, colors):
-    """AND of the given selectors, and the intensity the colours give (or None)."""
+    """AND of the given kinds of selector (OR within a kind), and the intensity the colours give (or None)."""
     n = len(mesh.faces)
     mask = np.ones(n, dtype=bool)
     intensity = None
@@ -219,12 +226,9 @@ def _selection(mesh, faces, cone, box, sphere, colors):
         sel = np.zeros(n, dtype=bool)
         sel[check_indices("faces", faces, n)] = True
         mask &= sel
-    if cone is not None:
-        mask &= faces_in_cone(mesh, *cone)
-    if box is not None:
-        mask &= faces_in_box(mesh, *box)
-    if sphere is not None:
-        mask &= faces_in_sphere(mesh, *sphere)
+    for value, select in ((cone, faces_in_cone), (box, faces_in_box), (sphere, faces_in_sphere)):
+        if value is not None:
+            mask &= np.logical_or.reduce([select(mesh, *v) for v in _selectors(value)])
     if colors is not None:
         stained, intensity = faces_from_colors(mesh, **(colors or {}))
         mask &= stained
@@ -258,12 +262,12 @@ def mark_stain(mesh, *, faces=None, cone=None, box=None, sphere=None, colors=Non
         The part, metres (see :func:`mavac.geometry.mesh.load_mesh` with ``role="part"``).
     faces : (n_faces,) bool or (k,) int, optional
         Explicit stained faces.
-    cone : (direction (3,), angle_deg), optional
+    cone : (direction (3,), angle_deg), or a list of them (their union), optional
         Faces whose outward normal is within the angle of the direction (``((0, 0, 1), 30)``:
         "faces within 30 deg of up").
-    box : (lower (3,), upper (3,)), optional, metres
+    box : (lower (3,), upper (3,)), or a list of them (their union), optional, metres
         Faces whose centre is in the box.
-    sphere : (centre (3,), radius), optional, metres
+    sphere : (centre (3,), radius), or a list of them (their union), optional, metres
         Faces whose centre is in the sphere.
     colors : dict or {}, optional
         Stain from the colours in the file; keyword arguments of :func:`faces_from_colors`
@@ -327,43 +331,93 @@ def mark_stain(mesh, *, faces=None, cone=None, box=None, sphere=None, colors=Non
     return part_from_mesh(mesh, stain, p, name, intensity=inten)
 
 
+#: how a stain spec is written (``--help`` and error messages)
+STAIN_GRAMMAR = ("up:30, down:45, +x:20 (also -x, +y, -y, +z, -z; x = +x), a direction vector x,y,z:30, "
+                 "box:x0,y0,z0,x1,y1,z1, sphere:x,y,z,r, colors, colors:#rrggbb or faces:i,j,k; join several "
+                 "with ',' (selectors of one kind are united, different kinds intersected)")
+_ARITY = {"box": 6, "sphere": 4}
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _vector_end(tokens: list[str], j: int) -> bool:
+    """Whether tokens j, j+1, j+2 are a direction vector with its angle (``0,0,1:30``)."""
+    return (j + 2 < len(tokens) and _number(tokens[j]) and _number(tokens[j + 1])
+            and ":" in tokens[j + 2] and _number(tokens[j + 2].partition(":")[0]))
+
+
+def _stain_selectors(spec: str) -> list[tuple[str, list[str], str]]:
+    """Split a spec at its joining commas: (kind, arguments, text) per selector; a cone's
+    arguments are its direction's three components and its angle (empty for the default)."""
+    tokens = [t.strip() for t in str(spec).split(",")]
+    out, i = [], 0
+    while i < len(tokens):
+        start = i
+        kind, _, first = tokens[i].partition(":")
+        kind, i = kind.lower(), i + 1
+        if kind in _ARITY:
+            args, i = [first, *tokens[i:i + _ARITY[kind] - 1]], i + _ARITY[kind] - 1
+        elif kind == "faces":
+            args = [first]
+            while i < len(tokens) and tokens[i].isdigit() and not _vector_end(tokens, i):
+                args, i = [*args, tokens[i]], i + 1
+        elif kind in DIRECTIONS:
+            kind, args = "cone", [*map(str, DIRECTIONS[kind]), first]
+        elif _number(kind):  # a direction vector: its angle follows the third component
+            last, _, angle = (tokens[i + 1] if i + 1 < len(tokens) else "").partition(":")
+            kind, args, i = "cone", [tokens[i - 1], tokens[i] if i < len(tokens) else "", last, angle], i + 2
+        else:
+            args = [first] if first else []
+        out.append((kind, args, ",".join(tokens[start:i])))
+    return out
+
+
+def _stain_value(kind: str, args: list[str], scale: float):
+    """(keyword of :func:`mark_stain`, value) of one selector; ValueError if malformed."""
+    if kind == "cone":
+        return "cone", (tuple(float(v) for v in args[:3]), float(args[3]) if args[3] else 30.0)
+    if kind in _ARITY and len(args) == _ARITY[kind]:
+        v = [float(x) * scale for x in args]
+        return kind, ((v[:3], v[3:]) if kind == "box" else (v[:3], v[3]))
+    if kind == "colors" and len(args) <= 1:
+        return "colors", {"stain_color": _hex_rgb(args[0])} if args else {}
+    if kind == "faces":
+        ids = [int(x) for x in args]
+        if max(ids) >= 2 ** 62:  # beyond any mesh; numpy would raise OverflowError
+            raise ValueError(f"stain spec faces: index {max(ids)} is beyond any mesh's faces")
+        return "faces", np.array(ids, dtype=np.int64)
+    raise ValueError
+
+
 def parse_stain(spec: str, scale: float = 1.0) -> dict:
     """Keyword arguments of :func:`mark_stain` from a command-line stain spec.
 
-    ``up:30`` (or ``down``, ``+x`` ... ``-z``, or ``x,y,z``, then the cone's half-angle in
-    degrees), ``box:x0,y0,z0,x1,y1,z1``, ``sphere:x,y,z,r``, ``colors`` or ``colors:#rrggbb``,
-    ``faces:i,j,k``. Lengths are in the file's units and multiplied by ``scale`` (metres per
-    unit). Several specs joined with ``+`` are combined with AND (``up:30+box:...``).
+    A spec is selectors joined with ``,`` (:data:`STAIN_GRAMMAR`): a normal cone ``up:30`` (or
+    ``down``, ``+x`` ... ``-z``, ``x``, or a vector ``x,y,z:30``; the half-angle in degrees,
+    default 30), ``box:x0,y0,z0,x1,y1,z1``, ``sphere:x,y,z,r``, ``colors`` or
+    ``colors:#rrggbb``, ``faces:i,j,k``. Selectors of one kind are united (``up:30,down:30``:
+    top and bottom), different kinds intersected (``up:30,box:...``: the top inside the box).
+    Whole numbers after ``faces:`` are face indices, so a direction vector there needs its angle.
+    Lengths are in the file's units and multiplied by ``scale`` (metres per unit).
     """
     out: dict = {}
-    for part in str(spec).split("+"):
-        kind, _, arg = part.strip().partition(":")
-        kind = kind.strip().lower()
+    for kind, args, text in _stain_selectors(spec):
         try:
-            if kind in DIRECTIONS or "," in kind:
-                direction = DIRECTIONS.get(kind) or tuple(float(v) for v in kind.split(","))
-                out["cone"] = (direction, float(arg) if arg else 30.0)
-            elif kind == "box":
-                v = [float(x) * scale for x in arg.split(",")]
-                if len(v) != 6:
-                    raise ValueError
-                out["box"] = (v[:3], v[3:])
-            elif kind == "sphere":
-                v = [float(x) for x in arg.split(",")]
-                if len(v) != 4:
-                    raise ValueError
-                out["sphere"] = ([x * scale for x in v[:3]], v[3] * scale)
-            elif kind == "colors":
-                out["colors"] = {} if not arg else {"stain_color": _hex_rgb(arg)}
-            elif kind == "faces":
-                out["faces"] = np.array([int(x) for x in arg.split(",")], dtype=np.int64)
-            else:
-                raise ValueError
-        except ValueError:
-            raise ValueError(f"stain spec {part!r} not understood; use up:30, down:45, +x:20, 0,0,1:30, "
-                             "box:x0,y0,z0,x1,y1,z1, sphere:x,y,z,r, colors, colors:#rrggbb or faces:i,j,k "
-                             "(join several with '+')") from None
-    return out
+            key, value = _stain_value(kind, args, scale)
+        except ValueError as exc:
+            if str(exc).startswith("stain spec"):
+                raise
+            raise ValueError(f"stain spec {text!r} not understood; use {STAIN_GRAMMAR}") from None
+        if key == "colors" and key in out:
+            raise ValueError("stain spec: give colors once")
+        out.setdefault(key, []).append(value)
+    return {k: v[0] if len(v) == 1 else (np.concatenate(v) if k == "faces" else v) for k, v in out.items()}
 
 
 def _hex_rgb(text: str) -> tuple[float, float, float]:

@@ -15,7 +15,7 @@ import numpy as np
 import trimesh
 
 from ..validate import check_int, check_positive
-from .mesh import check_mesh
+from .mesh import check_mesh, local_origin
 
 #: most points :func:`sample_surface` makes (about 100 MB of Poisson-disk work)
 MAX_POINTS = 2_000_000
@@ -89,9 +89,10 @@ def sample_surface(mesh: trimesh.Trimesh, spacing: float, seed: int = 0) -> Surf
     points = np.asarray(cloud.points, dtype=np.float64)
     # Open3D does not say which triangle a sample came from: ask the closest-point query.
     scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(vertices.astype(np.float32)),
+    origin = local_origin(vertices)  # float32 queries, relative to a point near the mesh
+    scene.add_triangles(o3d.core.Tensor((vertices - origin).astype(np.float32)),
                         o3d.core.Tensor(faces.astype(np.uint32)))
-    closest = scene.compute_closest_points(o3d.core.Tensor(points.astype(np.float32)))
+    closest = scene.compute_closest_points(o3d.core.Tensor((points - origin).astype(np.float32)))
     face_index = closest["primitive_ids"].numpy().astype(np.int64)
     normals = np.asarray(mesh.face_normals, dtype=np.float64)[face_index]
     return SurfacePoints(points=points, normals=normals, face_index=face_index)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.mesh import local_origin
 from ..geometry.transforms import check_transform, compose, points_in_frame, vectors_in_frame
 from ..params import CameraParams, GuardParams, Visibility
 from ..planning.greedy import GreedyResult, greedy_select
@@ -48,6 +49,7 @@ def guard_targets(points, normals, spacing: float) -> np.ndarray:
     check_positive("spacing", spacing)
     if len(points) == 0:
         return np.zeros(0, dtype=np.int64)
+    points = points - local_origin(points)  # cells and ties move with S, wherever it sits
     cell = np.floor(points / spacing).astype(np.int64)
     axis = np.argmax(np.abs(normals), axis=1)
     sign = np.sign(normals[np.arange(len(normals)), axis]).astype(np.int64)

@@ -41,6 +41,7 @@ from ..robots.collision import CollisionChecker
 from ..robots.kinematics import maneuverability
 from ..robots.models import ur10_mobile
 from ..seeding import rng_for
+from ..validate import check_positive, check_size
 from ..vision.visibility import VisibilityScene
 from ..viz.scenes import inspection_plan_html
 from . import guards as G
@@ -273,9 +274,17 @@ def _timed(timings: dict, stage: str):
     timings[stage] = time.perf_counter() - t0
 
 
+#: Most surface elements an inspection plan takes: 40 times the test bench's 2,310 at 5 cm; every
+#: element is a guard target and a visibility test per view, so more would run for hours.
+MAX_SURFACE_ELEMENTS = 100_000
+
+
 def surface_elements(mesh, spacing: float, seed: int):
     """S on the machine (:class:`mavac.geometry.surface.SurfacePoints`), without the faces
-    standing on the floor (not exposed)."""
+    standing on the floor (not exposed); ValueError, before sampling, when ``spacing`` would
+    give more than :data:`MAX_SURFACE_ELEMENTS`."""
+    check_positive("surface_spacing", spacing)
+    check_size("surface_spacing", spacing, float(mesh.area) / spacing**2, MAX_SURFACE_ELEMENTS, "surface elements")
     s = sample_surface(mesh, spacing, seed=seed)
     return s.subset(~on_floor(s.points[:, 2], s.normals[:, 2]))
 

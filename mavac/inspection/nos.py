@@ -22,6 +22,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from sklearn.cluster import DBSCAN
 
+from ..geometry.mesh import local_origin
 from ..geometry.transforms import compose, se2_matrices
 from ..params import InspectionParams, NoSParams
 from ..planning.rrt import plan_rrt_connect
@@ -136,23 +137,34 @@ def cluster_unobserved(points, observed, eps: float, min_samples: int) -> np.nda
     return labels
 
 
-def raycasting_scene(mesh, floor_z: float | None = 0.0):
-    """Open3D RaycastingScene of the machine mesh, plus a large floor quad at ``floor_z``.
+@dataclass
+class RayScene:
+    """An Open3D ``RaycastingScene`` whose float32 geometry is relative to ``origin``
+    (:func:`mavac.geometry.mesh.local_origin`); ray origins are moved by it before casting."""
+
+    scene: object
+    origin: np.ndarray
+
+
+def raycasting_scene(mesh, floor_z: float | None = 0.0) -> RayScene:
+    """The machine mesh, plus a large floor quad at ``floor_z``, for :func:`first_hit_distance`.
 
     The floor quad sits 1 mm below ``floor_z`` so it never hides the machine's own bottom.
     """
     import open3d as o3d
 
     scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32))
+    origin = local_origin(mesh.vertices)
+    scene.add_triangles(np.asarray(np.asarray(mesh.vertices) - origin, dtype=np.float32),
+                        np.asarray(mesh.faces, dtype=np.uint32))
     if floor_z is not None:
         c = np.asarray(mesh.bounds, dtype=float).mean(axis=0)
         h = 100.0
         z = floor_z - 1e-3
         v = np.array([[c[0] - h, c[1] - h, z], [c[0] + h, c[1] - h, z],
-                      [c[0] + h, c[1] + h, z], [c[0] - h, c[1] + h, z]], dtype=np.float32)
-        scene.add_triangles(v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32))
-    return scene
+                      [c[0] + h, c[1] + h, z], [c[0] - h, c[1] + h, z]]) - origin
+        scene.add_triangles(v.astype(np.float32), np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32))
+    return RayScene(scene, origin)
 
 
 def first_hit_distance(scene, origins, directions) -> np.ndarray:
@@ -160,7 +172,8 @@ def first_hit_distance(scene, origins, directions) -> np.ndarray:
 
     Parameters
     ----------
-    scene : open3d.t.geometry.RaycastingScene
+    scene : RayScene
+        From :func:`raycasting_scene`.
     origins, directions : (k, 3) float
         Directions need not be unit; distances are in units of their length.
 
@@ -170,10 +183,10 @@ def first_hit_distance(scene, origins, directions) -> np.ndarray:
     """
     import open3d as o3d
 
-    rays = np.hstack([np.asarray(origins, dtype=np.float32), np.asarray(directions, dtype=np.float32)])
+    rays = np.hstack([np.asarray(origins, dtype=float) - scene.origin, np.asarray(directions, dtype=float)])
     if len(rays) == 0:
         return np.zeros(0)
-    out = scene.cast_rays(o3d.core.Tensor(rays))
+    out = scene.scene.cast_rays(o3d.core.Tensor(rays.astype(np.float32)))
     return out["t_hit"].numpy().astype(float)
 
 
@@ -229,7 +242,7 @@ def nos_clusters(mesh, points, normals, observed, params: NoSParams, *, spacing:
         Spacing of S; the DBSCAN radius is ``params.eps_factor * spacing``.
     floor_z : float or None
         Height of the floor that blocks rays (None: no floor).
-    scene : RaycastingScene, optional
+    scene : RayScene, optional
         Reuse a scene built by :func:`raycasting_scene`.
 
     Returns

@@ -51,7 +51,7 @@ from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
 from tqdm.auto import tqdm
 
 from ..parallel import single_thread
-from ..params import OPERATION_PARAMS, GPRParams
+from ..params import MAX_EXPERIMENTS, OPERATION_PARAMS, GPRParams
 from ..seeding import rng_for
 from ..validate import (ParameterTypeError, check_array, check_callable, check_instance, check_int,
                         check_nonnegative, check_points, check_real)
@@ -341,7 +341,7 @@ def random_search(experiment, params: GPRParams = GPRParams(), *, budget: int = 
 
     The answer is the best-objective point whose measured C_p met the threshold.
     """
-    budget = check_int("budget", budget, 1)
+    budget = check_int("budget", budget, 1, MAX_EXPERIMENTS)
     _check_learner_inputs(experiment, params, rng)
     rng = rng_for(params.seed, "gpr") if rng is None else rng
     rows: list = []

@@ -19,13 +19,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..geometry.parts import Part, load_part, stain_from_field
+from ..geometry.parts import PART_NAMES, Part, load_part, stain_from_field
 from ..geometry.transforms import look_at
 from ..paper import paper_scalar
 from ..params import BimanualCellParams, LissajousParams, ToolpathParams
 from ..seeding import check_seed, int_seed, rng_for
 from ..sim.world import SimWorld
-from ..validate import check_instance
+from ..validate import ParameterTypeError, check_bool, check_instance
 from .cell import HOLDER_SEED, cell_robots
 from .holding import HeldSetups, plan_cell_setups, plan_params_for_cell, setup_configurations
 from .residue import StainState, perceive, residue_faces
@@ -104,6 +104,11 @@ def run_part(name: str, *, fast: bool, lissajous: LissajousParams | None = None,
         Take pybullet camera snapshots before and after each pass.
     """
     t0 = time.perf_counter()
+    if not isinstance(name, str):
+        raise ParameterTypeError(f"name must be a part name (str), got {name!r} ({type(name).__name__})")
+    if name not in PART_NAMES:
+        raise ValueError(f"name must be one of {PART_NAMES}, got {name!r}")
+    fast = check_bool("fast", fast)
     seed = check_seed(seed)
     lissajous = paper_lissajous(name) if lissajous is None else lissajous
     check_cell_inputs(cell, lissajous, toolpath)

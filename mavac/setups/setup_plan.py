@@ -32,6 +32,11 @@ from .unreachable import unreachable_causes, unreachable_message
 from .viewer import setup_plan_html
 
 
+def _finite(value) -> float | None:
+    """``value`` as a float for JSON, None when absent, infinite or NaN (the status says why)."""
+    return float(value) if value is not None and math.isfinite(value) else None
+
+
 @dataclass
 class SetupPlan:
     """An ordered setup plan for one part.
@@ -116,12 +121,10 @@ class SetupPlan:
         """
         out = {
             "part": self.part_name, "status": self.status, "method": self.method,
-            "cost_s": float(self.cost), "setup_time_s": float(self.setup_time_total),
+            "cost_s": _finite(self.cost), "setup_time_s": float(self.setup_time_total),
             "execution_time_s": float(self.execution_time_total),
-            "certificate_cost_s": None if self.certificate_cost is None else float(self.certificate_cost),
-            "certificate_gap": None if self.certificate_gap is None else float(self.certificate_gap),
-            "certificate_bound_s": (float(self.certificate_bound) if self.certificate_bound is not None
-                                    and math.isfinite(self.certificate_bound) else None),
+            "certificate_cost_s": _finite(self.certificate_cost), "certificate_gap": _finite(self.certificate_gap),
+            "certificate_bound_s": _finite(self.certificate_bound),
             "certificate_proof": self.certificate_proof,
             "n_rfc": int(self.n_rfc), "candidates": int(self.candidates), "nondominated": int(self.nondominated),
             "node_expansions": int(self.node_expansions),
@@ -135,6 +138,11 @@ class SetupPlan:
         if timings:
             out["seconds"] = float(self.seconds)
         return out
+
+    @property
+    def found(self) -> bool:
+        """Whether there is a plan: the stain is empty or setups of finite cost cover it."""
+        return self.status == "empty" or (len(self.setups) > 0 and math.isfinite(self.cost))
 
     def to_json(self, path, timings: bool = False):
         """Write :meth:`to_dict` atomically as JSON."""
@@ -165,6 +173,9 @@ class SetupPlan:
         if self.status == "no_solution":
             lines = [f"{self.part_name}: NO SOLUTION: none of {self.candidates} candidate setups reaches any "
                      f"stain patch (n_rfc {self.n_rfc}); no plan, no cost, no certificate"]
+        elif not self.found:
+            lines = [f"{self.part_name}: NO SOLUTION: the search stopped ({self.status}) after "
+                     f"{self.node_expansions} nodes before finding any plan"]
         else:
             lines = [f"{self.part_name}: {len(self.setups)} setups, T = {self.cost:.1f} s "
                      f"(setup {self.setup_time_total:.1f} s + execution {self.execution_time_total:.1f} s), "

@@ -36,7 +36,7 @@ import time
 import numpy as np
 import trimesh
 
-from ..geometry.mesh import check_mesh
+from ..geometry.mesh import check_mesh, local_origin
 from ..geometry.transforms import check_transforms
 from ..params import CameraParams, Visibility
 from ..tolerances import RAY_EPS_RELATIVE
@@ -137,7 +137,8 @@ class VisibilityScene:
 
     def __init__(self, mesh: trimesh.Trimesh, eps: float | None = None):
         check_mesh("mesh", mesh)
-        self.vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
+        self.origin = local_origin(mesh.vertices)  # rays are cast relative to it, in float32
+        self.vertices = np.ascontiguousarray(np.asarray(mesh.vertices) - self.origin, dtype=np.float32)
         self.faces = np.ascontiguousarray(mesh.faces, dtype=np.uint32)
         self.scale = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
         self.eps = RAY_EPS_RELATIVE * self.scale if eps is None else float(check_positive("eps", eps))
@@ -184,7 +185,7 @@ class VisibilityScene:
         far = length > self.eps
         # Scale each direction so that t = 1 is eps short of the target: one tfar for all rays.
         rays = np.empty((int(far.sum()), 6), dtype=np.float32)
-        rays[:, :3] = O[far]
+        rays[:, :3] = O[far] - self.origin
         rays[:, 3:] = d[far] * ((length[far] - self.eps) / length[far])[:, None]
         hit = np.empty(len(rays), dtype=bool)
         for s in range(0, len(rays), _RAYS_PER_CALL):

@@ -68,16 +68,49 @@ def sigterm_as_interrupt():
             signal.raise_signal(signal.SIGTERM)
 
 
+#: signals held while the server starts, acted on once the block that ends it is entered
+_HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Inside the block SIGINT, SIGTERM and SIGHUP (those with a Python handler) are recorded,
+    not acted on; yields ``release``, which restores the handlers and sends the recorded
+    signals again (also run on leaving the block). Main thread only, where handlers run."""
+    received, previous = [], {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in _HELD_SIGNALS:
+            if callable(signal.getsignal(sig)):
+                previous[sig] = signal.signal(sig, lambda signum, frame: received.append(signum))
+
+    def release():
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        previous.clear()
+        while received:
+            signal.raise_signal(received.pop(0))
+
+    try:
+        yield release
+    finally:
+        release()
+
+
 @contextlib.contextmanager
 def scene():
     """A fresh meshcat visualizer whose server is shut down on exit: on error, SIGINT and
-    SIGTERM too (:func:`sigterm_as_interrupt`)."""
+    SIGTERM too (:func:`sigterm_as_interrupt`), also when they arrive while it starts.
+
+    meshcat's server (``python -m meshcat.servers.zmqserver``) takes no address: its ZeroMQ
+    socket listens on 127.0.0.1, its web server on every interface for the seconds it runs.
+    """
     import meshcat
 
-    with sigterm_as_interrupt():
+    with sigterm_as_interrupt(), _signals_held() as release:
         with contextlib.redirect_stdout(io.StringIO()):  # the URL of a server that will not outlive us
             vis = meshcat.Visualizer()
         try:
+            release()  # a Ctrl-C that came while the server started acts here
             yield vis
         finally:
             shutdown(vis)
