@@ -336,7 +336,9 @@ def test_the_tool_tip_warning_is_printed_once(files, tmp_path, capsys):
 
 def test_sighup_is_an_interrupt(tmp_path):
     """A closed terminal (SIGHUP) ends the command as Ctrl-C does: status 130, cleanup run."""
+    # a terminal's SIGHUP, with its default disposition even when the tests run under nohup
     code = ("import os, signal, sys, time\nfrom mavac import cli\n"
+            "signal.signal(signal.SIGHUP, signal.SIG_DFL)\n"
             "def hung_up(args):\n    os.kill(os.getpid(), signal.SIGHUP)\n    time.sleep(30)\n"
             "cli.cmd_setups = hung_up\n"
             "sys.exit(cli.main(['setups', 'p.stl', '--stain', 'up:30']))\n")

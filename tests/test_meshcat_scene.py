@@ -50,6 +50,8 @@ def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
         return vis
 
     monkeypatch.setattr(meshcat, "Visualizer", starting)
+    # Ctrl-C as a terminal delivers it, even when the tests run as a background job (SIGINT ignored)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     idle = threading.Event()  # another thread, which a process-wide signal may be handed to
     threading.Thread(target=idle.wait, daemon=True).start()
     try:
@@ -58,6 +60,7 @@ def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
                 pass
         assert servers and servers[0].poll() is not None
     finally:
+        signal.signal(signal.SIGINT, previous)
         idle.set()
         for proc in servers:
             if proc.poll() is None:
