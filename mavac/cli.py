@@ -1,4 +1,5 @@
-"""Command line: ``mavac inspect``, ``mavac setups``, ``mavac reach`` (also ``python -m mavac``).
+"""Command line: ``mavac inspect``, ``mavac setups``, ``mavac reach``, ``mavac clean`` (also
+``python -m mavac``).
 
 From a mesh file to a result a person can read without the source: an HTML page (framed, with a
 legend, the robot animated), a JSON or CSV file, and a summary on the terminal that names the
@@ -67,11 +68,12 @@ def _checked_output(flag: str, path: Path) -> Path:
     return path
 
 
-def _outputs(args, source: str, stem: str, companion: str) -> tuple[Path, Path]:
-    """The HTML page and its ``.json`` or ``.csv`` companion, checked before any work.
+def _outputs(args, source: str, stem: str, companion: str, suffix: str = "html") -> tuple[Path, Path]:
+    """The main output (an HTML page, or ``clean``'s JSON) and its ``.json`` or ``.csv``
+    companion, checked before any work.
 
-    The page defaults to ``<stem>.html`` in the user's output folder; the companion to the page's
-    name with its own suffix. Neither may be the input, nor both the same file.
+    The main output defaults to ``<stem>.<suffix>`` in the user's output folder; the companion to
+    its name with its own suffix. Neither may be the input, nor both the same file.
     """
     cache_dir()  # refuses a MAVAC_CACHE that names a file, now rather than after the work
     paths = {}
@@ -81,7 +83,8 @@ def _outputs(args, source: str, stem: str, companion: str) -> tuple[Path, Path]:
         if value is not None:
             paths[flag] = Path(value).expanduser()
         else:
-            paths[flag] = paths["--out"].with_suffix(f".{default}") if default else user_output_dir() / f"{stem}.html"
+            paths[flag] = (paths["--out"].with_suffix(f".{default}") if default
+                           else user_output_dir() / f"{stem}.{suffix}")
         if paths[flag].resolve() == Path(source).resolve():
             raise ValueError(f"{flag} {paths[flag]} is the input mesh; give another file name")
         _checked_output(flag, paths[flag])
@@ -272,6 +275,125 @@ def cmd_reach(args) -> int:
     return 0
 
 
+#: most trials of one ``mavac clean`` run (each is seconds to minutes of simulation)
+MAX_CLEAN_TRIALS = 1_000
+
+
+def _clean_setup(args):
+    """``clean``'s parameters, checked before any work: (inspection params, online params, seeds)."""
+    from .experiments.mavac_offline import fast_params
+    from .params import DustParams, InspectionParams, OnlineParams
+    from .seeding import check_seed
+
+    if not 1 <= args.trials <= MAX_CLEAN_TRIALS:
+        raise ValueError(f"--trials must be in [1, {MAX_CLEAN_TRIALS}], got {args.trials}")
+    if args.jobs == 0 or args.jobs < -1:
+        raise ValueError(f"--jobs must be a positive worker count or -1 (every core), got {args.jobs}")
+    check_seed(args.seed)
+    try:
+        check_seed(args.seed + args.trials - 1)
+    except ValueError:
+        raise ValueError(f"--seed {args.seed} with --trials {args.trials}: the last trial's seed "
+                         f"{args.seed + args.trials - 1} is above 2**31 - 1") from None
+    online = OnlineParams(dust=DustParams(spacing=DustParams.spacing if args.spacing is None else args.spacing))
+    offline = fast_params() if args.fast else InspectionParams()
+    return dataclasses.replace(offline, seed=args.seed), online, list(range(args.seed, args.seed + args.trials))
+
+
+def _clean_trial(item):
+    """One trial of ``mavac clean`` (module level, so that worker processes can run it)."""
+    from .cleaning.trial import run_trial
+
+    machine, plan, params, seed = item
+    return run_trial(machine, plan, params=params, seed=seed)
+
+
+def _json_safe(value):
+    """``value`` with NaN and infinite floats as None (JSON holds neither)."""
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    return value
+
+
+def _clean_report(args, results, plan, offline, online) -> tuple[dict, object]:
+    """The JSON document and the per-heap table (one row per heap per trial) of a clean run."""
+    import pandas as pd
+
+    from .cleaning.misses import cause_counts
+
+    table = pd.concat([r.heap_table().assign(seed=r.seed) for r in results], ignore_index=True)
+    table = table[["seed"] + [c for c in table.columns if c != "seed"]]
+    heaps, cleaned = len(table), int(table["cleaned"].sum())
+    reasons = sorted({r.reason for r in results if r.reason})
+    trials = [dict(r.row(), trial=i + 1, reason=r.reason, warnings=list(r.warnings),
+                   misses=r.miss_counts()) for i, r in enumerate(results)]
+    doc = {
+        "mesh": str(Path(args.mesh).resolve()), "machine": results[0].machine,
+        "status": "; ".join(reasons) if reasons else "ok",
+        "parameters": {"units": args.units, "up": args.up, "spacing": online.dust.spacing, "seed": args.seed,
+                       "trials": args.trials, "fast": args.fast, "inspection": dataclasses.asdict(offline),
+                       "online": dataclasses.asdict(online)},
+        "plan": {"C": plan.C, "O": plan.O, "visibility": plan.visibility, "spots": plan.n_spots,
+                 "guards": plan.n_guards, "nos_guards": plan.n_nos_guards, "poses": int(len(plan.poses)),
+                 "warnings": list(plan.warnings)},
+        "summary": {"trials": len(results), "heaps": heaps, "cleaned": cleaned,
+                    "cleaning_pct": round(100.0 * cleaned / heaps, 3) if heaps else 0.0,
+                    "cleaning_pct_mean_of_trials": round(float(np.mean([r.cleaning_pct for r in results])), 3),
+                    "misses": cause_counts(table["cause"].to_numpy()),
+                    "sim_time_s": round(sum(r.times.sim_time_s for r in results), 3),
+                    "wall_s": round(sum(r.wall_s for r in results), 2)},
+        "trials": trials,
+    }
+    return _json_safe(doc), table
+
+
+def cmd_clean(args) -> int:
+    """MAVAC online cleaning of a machine in simulation: plan, then trials of Algorithm 1."""
+    import json
+
+    from .cleaning.heaps import heaps_for_trial
+    from .geometry.machines import machine_from_mesh
+    from .inspection.inspection_plan import plan_inspection
+    from .parallel import map_trials
+
+    stem = Path(args.mesh).stem
+    out, csv = _outputs(args, args.mesh, f"{stem}_clean", "csv", suffix="json")
+    offline, online, seeds = _clean_setup(args)
+    t0 = time.perf_counter()
+    bar = _stage_bar(["loading mesh", "inspection plan", "cleaning trials", "writing"], args.quiet)
+    with bar:
+        machine = machine_from_mesh(_load(args.mesh, args.units, "machine", args.up), name=stem)
+        try:  # a heap spacing the machine cannot take is refused before the plan
+            heaps_for_trial(machine, online.dust, seeds[0])
+        except ValueError as exc:
+            raise ValueError(f"--spacing: {exc}") from None
+        _next(bar, "inspection plan")
+        plan = _unrepeated(lambda: plan_inspection(machine, params=offline))
+        _next(bar, "cleaning trials")
+        results = map_trials(_clean_trial, [(machine, plan, online, s) for s in seeds], n_jobs=args.jobs,
+                             desc="cleaning trials", progress=_bars(args))
+        _next(bar, "writing")
+        doc, table = _clean_report(args, results, plan, offline, online)
+        with atomic_paths(out, csv) as (tmp_out, tmp_csv):
+            tmp_out.write_text(json.dumps(doc, indent=2, sort_keys=True, allow_nan=False))
+            table.to_csv(tmp_csv, index=False, float_format="%.6g")
+        _next(bar, "done")
+    print(plan.summary())
+    for r in results:
+        print(r.summary())
+    if len(results) > 1:
+        s = doc["summary"]
+        print(f"{stem}: {s['cleaned']} of {s['heaps']} heaps cleaned over {s['trials']} trials "
+              f"({s['cleaning_pct']:.1f} %; mean of the trials {s['cleaning_pct_mean_of_trials']:.1f} %)")
+    _print_frame(machine)
+    print(f"wrote {out} and {csv} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
 def _common(p: argparse.ArgumentParser, *, role: str) -> None:
     p.add_argument("--units", choices=("m", "cm", "mm", "in"), default=None, help=UNITS_HELP)
     p.add_argument("--up", choices=UP_CHOICES, default="z", metavar="{+x,-x,+y,-y,+z,-z}",
@@ -319,10 +441,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mavac", formatter_class=fmt,
         description="Plan robotic cleaning from a mesh: MAVAC inspection plans for machines (UR10 on a mobile "
-                    "base, camera on the tool), Kabir et al. setup plans for stained parts (Puma 560), and "
-                    "REACH-style reach studies. Every length is in metres unless a flag says otherwise.")
+                    "base, camera on the tool), MAVAC's simulated cleaning of those machines, Kabir et al. setup "
+                    "plans for stained parts (Puma 560), and REACH-style reach studies. Every length is in metres "
+                    "unless a flag says otherwise.")
     parser.add_argument("--version", action="version", version=f"mavac {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{inspect,setups,reach}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{inspect,setups,reach,clean}")
 
     p = sub.add_parser("inspect", formatter_class=fmt, help="inspection plan of a machine (MAVAC offline stage)",
                        description="MAVAC's offline computation on your machine: spots for the mobile base, guard "
@@ -378,12 +501,34 @@ def build_parser() -> argparse.ArgumentParser:
     _common(p, role="machine")
     _machine_options(p)
     p.set_defaults(func=cmd_reach)
+
+    p = sub.add_parser("clean", formatter_class=fmt, help="simulated cleaning of a machine (MAVAC online stage)",
+                       description="MAVAC's online loop on your machine, simulated in pybullet: green dust heaps "
+                                   "on every upward-facing surface, then, for each pose of the inspection plan, "
+                                   "look, detect the dust, plan an approach and vacuum it (Algorithm 1). The "
+                                   "inspection plan is computed first, as 'mavac inspect' does (its JSON file "
+                                   "keeps no surface elements, so it cannot be read back). Writes a JSON file "
+                                   "(summary, one entry per trial, parameters) and a CSV with one row per heap "
+                                   "per trial (position, cleaned, cause of the miss). The machine should be "
+                                   "0.3-5 m across.")
+    p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
+    p.add_argument("--spacing", type=float, default=None,
+                   help="distance between dust heaps, metres (default 0.10, the paper's)")
+    p.add_argument("--trials", type=int, default=1,
+                   help="trials, each with its own heap layout: seeds --seed .. --seed + trials - 1")
+    p.add_argument("--jobs", type=int, default=1, help="trials run at a time (-1: every core)")
+    p.add_argument("--fast", action="store_true",
+                   help="coarser inspection plan (as 'mavac inspect --fast'): seconds, fewer guards")
+    p.add_argument("--out", help="JSON result (default: <mesh>_clean.json in $MAVAC_OUT or the current directory)")
+    p.add_argument("--csv", help="CSV, one row per heap per trial (default: <mesh>_clean.csv beside the JSON file)")
+    _common(p, role="machine")
+    p.set_defaults(func=cmd_clean)
     return parser
 
 
 #: parameter fields the command line sets -> their flags, to name the flag in an error
-FIELD_FLAGS = {"radius": "--hpr-radius", "surface_spacing": "--spacing", "P_s": "--P-s", "P_g": "--P-g",
-               "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed"}
+FIELD_FLAGS = {"radius": "--hpr-radius", "surface_spacing": "--spacing", "spacing": "--spacing", "P_s": "--P-s",
+               "P_g": "--P-g", "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed"}
 
 
 def _with_flag(message: str) -> str:

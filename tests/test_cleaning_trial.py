@@ -244,3 +244,29 @@ def test_guard_solved_by_the_larger_budget_is_counted_and_no_two_plans_share_a_s
     assert (r.replanned, r.guards_unreachable, r.guards) == (1, 0, 4)
     seeds += [s for *_, s in calls]
     assert len(seeds) > len(calls) and len(set(seeds)) == len(seeds)
+
+
+def test_summary_and_heap_table_say_what_the_trial_stored(small):
+    machine, plan = small
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    table = r.heap_table()
+    assert list(table.columns) == ["heap", "x", "y", "z", "cleaned", "cause"]
+    assert len(table) == r.n_heaps and table["heap"].tolist() == list(range(r.n_heaps))
+    assert np.array_equal(table[["x", "y", "z"]].to_numpy(), r.heaps)
+    assert table["cleaned"].dtype == bool and table["cleaned"].tolist() == r.cleaned.tolist()
+    assert (table["cause"] == "").tolist() == table["cleaned"].tolist()
+    assert set(table["cause"]) <= {"", *T.CAUSES}
+    text = r.summary()
+    assert f"{r.n_cleaned} of {r.n_heaps} heaps cleaned ({r.cleaning_pct:.1f} %)" in text
+    assert "misses: " in text and "simulated time" in text and "wall time" in text
+    for cause, n in r.miss_counts().items():
+        assert (f"{cause} {n}" in text) == (n > 0)
+
+
+def test_summary_and_heap_table_of_a_trial_without_heaps(small):
+    _, plan = small
+    spire = trimesh.creation.cone(radius=0.2, height=2.0, sections=8)
+    r = T.run_trial(machine_from_mesh(spire, name="spire"), plan, params=PARAMS, seed=0)
+    assert r.heap_table().empty and list(r.heap_table().columns) == ["heap", "x", "y", "z", "cleaned", "cause"]
+    text = r.summary()
+    assert "0 of 0 heaps cleaned (0.0 %)" in text and "misses: none" in text and "reason: no heaps" in text

@@ -149,7 +149,7 @@ def test_interrupt_exits_130_and_leaves_no_file(files, tmp_path, capsys, monkeyp
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("command", ["inspect", "setups", "reach"])
+@pytest.mark.parametrize("command", ["inspect", "setups", "reach", "clean"])
 def test_help_gives_units_and_defaults(command, capsys):
     with pytest.raises(SystemExit) as exit_:
         cli.main([command, "--help"])
@@ -171,7 +171,7 @@ def test_python_dash_m_runs_the_command_line(files, tmp_path):
 def _parsed(monkeypatch, argv) -> argparse.Namespace:
     """The namespace ``main`` hands a command (the command itself replaced by a recorder)."""
     seen = {}
-    for name in ("cmd_inspect", "cmd_setups", "cmd_reach"):
+    for name in ("cmd_inspect", "cmd_setups", "cmd_reach", "cmd_clean"):
         monkeypatch.setattr(cli, name, lambda args: seen.setdefault("args", args) and 0)
     assert cli.main(argv) == 0
     return seen["args"]
@@ -358,3 +358,93 @@ def test_a_refused_parameter_is_named_by_its_flag(files, tmp_path, capsys, argv,
     argv = [a.format(**paths) for a in argv] + ["--units", "mm", "--quiet", "--out", str(tmp_path / "x.html")]
     code, _, err = run(argv, capsys)
     assert code == 1 and err.startswith(f"mavac {argv[0]}: error: {flag}: "), err
+
+
+# ---- mavac clean: MAVAC's simulated online cleaning of a user's machine -----------------------------
+
+#: small sizes: the coarse plan (--fast) and heaps 20 cm apart (about 15 on the box): seconds a trial
+CLEAN_FAST = ["--fast", "--spacing", "0.2", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def cleaned(tmp_path_factory):
+    """A 1.0 x 0.6 x 0.6 m box (metres, STL) cleaned in two trials (seeds 5 and 6)."""
+    d = tmp_path_factory.mktemp("clean")
+    trimesh.creation.box(bounds=[[0, 0, 0], [1.0, 0.6, 0.6]]).export(d / "box.stl")
+    code = cli.main(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "5", "--trials", "2",
+                     "--out", str(d / "out" / "run.json")])
+    return d, code
+
+
+def test_clean_writes_a_summary_json_and_one_csv_row_per_heap(cleaned):
+    d, code = cleaned
+    assert code == 0
+    assert sorted(p.name for p in (d / "out").iterdir()) == ["run.csv", "run.json"]  # the CSV takes --out's stem
+    doc = _strict_json(d / "out" / "run.json")
+    table = pd.read_csv(d / "out" / "run.csv", keep_default_na=False)
+    assert list(table.columns) == ["seed", "heap", "x", "y", "z", "cleaned", "cause"]
+    assert table["cleaned"].dtype == bool and sorted(set(table["seed"])) == [5, 6]
+    s = doc["summary"]
+    assert s["trials"] == 2 and s["heaps"] == len(table) > 0 and s["cleaned"] == table["cleaned"].sum()
+    assert s["cleaning_pct"] == pytest.approx(100.0 * table["cleaned"].mean(), abs=1e-3)
+    assert (table["cause"] == "").tolist() == table["cleaned"].tolist()
+    assert s["misses"] == {c: int((table["cause"] == c).sum()) for c in s["misses"]}
+    assert [t["seed"] for t in doc["trials"]] == [5, 6] and [t["trial"] for t in doc["trials"]] == [1, 2]
+    for t in doc["trials"]:
+        assert t["heaps"] == (table["seed"] == t["seed"]).sum() and "cleaning_pct" in t and "sim_time_s" in t
+    assert doc["status"] == "ok" and doc["parameters"]["spacing"] == 0.2 and doc["parameters"]["trials"] == 2
+    assert doc["plan"]["poses"] > 0 and doc["plan"]["visibility"] == "raycast"
+
+
+def test_clean_same_seed_gives_the_same_csv_byte_for_byte(cleaned, tmp_path, capsys):
+    d, _ = cleaned
+    code, out, err = run(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "5", "--trials", "2",
+                          "--out", str(tmp_path / "again.json")], capsys)
+    assert code == 0, err
+    assert (tmp_path / "again.csv").read_bytes() == (d / "out" / "run.csv").read_bytes()
+    assert "box, seed 5: " in out and "box, seed 6: " in out and "heaps cleaned over 2 trials" in out
+    assert "simulated time" in out and "wrote " in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--trials", "0"], "--trials must be in [1, "),
+    (["--spacing", "-1"], "--spacing: spacing must be in"),
+    (["--out", "{mesh}"], "--out {mesh} is the input mesh"),
+    (["--jobs", "0"], "--jobs must be a positive worker count"),
+    (["--seed", str(2**31 - 1), "--trials", "2"], "--seed 2147483647 with --trials 2"),
+    (["--seed", "-3"], "--seed: seed must be in"),
+])
+def test_clean_refuses_bad_input_before_any_work(cleaned, tmp_path, capsys, no_compute, argv, message):
+    mesh = str(cleaned[0] / "box.stl")
+    argv = [a.format(mesh=mesh) for a in argv]
+    out = [] if "--out" in argv else ["--out", str(tmp_path / "x.json")]
+    code, _, err = run(["clean", mesh, "--quiet", *out, *argv], capsys)
+    assert code == 1 and err.startswith(f"mavac clean: error: {message.format(mesh=mesh)}"), err
+    assert "Traceback" not in err and not list(tmp_path.iterdir())
+
+
+def test_clean_refuses_a_heap_spacing_the_machine_cannot_take_before_planning(cleaned, tmp_path, capsys,
+                                                                            monkeypatch):
+    import mavac.inspection.inspection_plan as plan_module
+
+    def planned(*args, **kwargs):
+        raise AssertionError("planned before refusing --spacing")
+
+    monkeypatch.setattr(plan_module, "plan_inspection", planned)
+    code, _, err = run(["clean", str(cleaned[0] / "box.stl"), "--quiet", "--spacing", "5",
+                        "--out", str(tmp_path / "x.json")], capsys)
+    assert code == 1 and err.startswith("mavac clean: error: --spacing: ") and "larger than the mesh" in err, err
+    assert not list(tmp_path.iterdir())
+
+
+def test_clean_interrupted_exits_130_and_leaves_no_file(cleaned, tmp_path, capsys, monkeypatch):
+    import mavac.parallel as parallel
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(parallel, "map_trials", interrupted)
+    code, _, err = run(["clean", str(cleaned[0] / "box.stl"), *CLEAN_FAST, "--out", str(tmp_path / "c.json")],
+                       capsys)
+    assert code == 130 and "interrupted" in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())

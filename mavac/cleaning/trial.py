@@ -158,6 +158,38 @@ class TrialResult:
     def miss_counts(self) -> dict:
         return cause_counts(self.causes)
 
+    def summary(self) -> str:
+        """A few lines a person can read: heaps cleaned of all and in per cent, the cause of
+        every miss with its count, the simulated time (base, arm, vacuum) and the wall time, s;
+        then the reason nothing could be done, if any, and the warnings."""
+        t = self.times
+        misses = ", ".join(f"{cause} {n}" for cause, n in self.miss_counts().items() if n) or "none"
+        lines = [f"{self.machine}, seed {self.seed}: {self.n_cleaned} of {self.n_heaps} heaps cleaned "
+                 f"({self.cleaning_pct:.1f} %)",
+                 f"  misses: {misses}",
+                 f"  simulated time {t.sim_time_s:.1f} s (base {t.base_s:.1f}, arm {t.arm_s:.1f}, vacuum "
+                 f"{t.vacuum_s:.1f}); wall time {self.wall_s:.1f} s"]
+        if self.reason:
+            lines.append(f"  reason: {self.reason}")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def heap_table(self):
+        """One row per heap: ``heap`` (index), ``x``, ``y``, ``z`` (true position, m),
+        ``cleaned`` (bool) and ``cause`` (:data:`mavac.cleaning.misses.CAUSES`, ``""`` where
+        cleaned). The trial does not record which guard saw a heap, so there is no such column.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        import pandas as pd
+
+        heaps = np.asarray(self.heaps, dtype=float).reshape(-1, 3)
+        return pd.DataFrame({"heap": np.arange(len(heaps)), "x": heaps[:, 0], "y": heaps[:, 1], "z": heaps[:, 2],
+                             "cleaned": np.asarray(self.cleaned, dtype=bool),
+                             "cause": np.asarray(self.causes).astype(str)})
+
     def row(self) -> dict:
         """One trial's row: the Table 2 columns (``data/results/mavac_table2.csv``), then
         ``guards``, ``replanned``, ``guards_unreachable``, ``fold_failures``, ``folds_retraced``
