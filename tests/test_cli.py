@@ -368,10 +368,10 @@ CLEAN_FAST = ["--fast", "--spacing", "0.2", "--quiet"]
 
 @pytest.fixture(scope="module")
 def cleaned(tmp_path_factory):
-    """A 1.0 x 0.6 x 0.6 m box (metres, STL) cleaned in two trials (seeds 5 and 6)."""
+    """A 1.0 x 0.6 x 0.6 m box (metres, STL) cleaned in two trials (seeds 0 and 1)."""
     d = tmp_path_factory.mktemp("clean")
     trimesh.creation.box(bounds=[[0, 0, 0], [1.0, 0.6, 0.6]]).export(d / "box.stl")
-    code = cli.main(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "5", "--trials", "2",
+    code = cli.main(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "0", "--trials", "2",
                      "--out", str(d / "out" / "run.json")])
     return d, code
 
@@ -383,13 +383,13 @@ def test_clean_writes_a_summary_json_and_one_csv_row_per_heap(cleaned):
     doc = _strict_json(d / "out" / "run.json")
     table = pd.read_csv(d / "out" / "run.csv", keep_default_na=False)
     assert list(table.columns) == ["seed", "heap", "x", "y", "z", "cleaned", "cause"]
-    assert table["cleaned"].dtype == bool and sorted(set(table["seed"])) == [5, 6]
+    assert table["cleaned"].dtype == bool and sorted(set(table["seed"])) == [0, 1]
     s = doc["summary"]
     assert s["trials"] == 2 and s["heaps"] == len(table) > 0 and s["cleaned"] == table["cleaned"].sum()
     assert s["cleaning_pct"] == pytest.approx(100.0 * table["cleaned"].mean(), abs=1e-3)
     assert (table["cause"] == "").tolist() == table["cleaned"].tolist()
     assert s["misses"] == {c: int((table["cause"] == c).sum()) for c in s["misses"]}
-    assert [t["seed"] for t in doc["trials"]] == [5, 6] and [t["trial"] for t in doc["trials"]] == [1, 2]
+    assert [t["seed"] for t in doc["trials"]] == [0, 1] and [t["trial"] for t in doc["trials"]] == [1, 2]
     for t in doc["trials"]:
         assert t["heaps"] == (table["seed"] == t["seed"]).sum() and "cleaning_pct" in t and "sim_time_s" in t
     assert doc["status"] == "ok" and doc["parameters"]["spacing"] == 0.2 and doc["parameters"]["trials"] == 2
@@ -398,11 +398,11 @@ def test_clean_writes_a_summary_json_and_one_csv_row_per_heap(cleaned):
 
 def test_clean_same_seed_gives_the_same_csv_byte_for_byte(cleaned, tmp_path, capsys):
     d, _ = cleaned
-    code, out, err = run(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "5", "--trials", "2",
+    code, out, err = run(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "0", "--trials", "2",
                           "--out", str(tmp_path / "again.json")], capsys)
     assert code == 0, err
     assert (tmp_path / "again.csv").read_bytes() == (d / "out" / "run.csv").read_bytes()
-    assert "box, seed 5: " in out and "box, seed 6: " in out and "heaps cleaned over 2 trials" in out
+    assert "box, seed 0: " in out and "box, seed 1: " in out and "heaps cleaned over 2 trials" in out
     assert "simulated time" in out and "wrote " in out
 
 
