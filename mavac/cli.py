@@ -433,6 +433,31 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
+def _clean_parser(sub, fmt) -> None:
+    """The ``clean`` subcommand's parser (MAVAC's online loop in simulation)."""
+    p = sub.add_parser("clean", formatter_class=fmt, help="simulated cleaning of a machine (MAVAC online stage)",
+                       description="MAVAC's online loop on your machine, simulated in pybullet: green dust heaps "
+                                   "on every upward-facing surface, then, for each pose of the inspection plan, "
+                                   "look, detect the dust, plan an approach and vacuum it (Algorithm 1). The "
+                                   "inspection plan is computed first, as 'mavac inspect' does (its JSON file "
+                                   "keeps no surface elements, so it cannot be read back). Writes a JSON file "
+                                   "(summary, one entry per trial, parameters) and a CSV with one row per heap "
+                                   "per trial (position, cleaned, cause of the miss). The machine should be "
+                                   "0.3-5 m across.")
+    p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
+    p.add_argument("--spacing", type=float, default=None,
+                   help="distance between dust heaps, metres (default 0.10, the paper's)")
+    p.add_argument("--trials", type=int, default=1,
+                   help="trials, each with its own heap layout: seeds --seed .. --seed + trials - 1")
+    p.add_argument("--jobs", type=int, default=1, help="trials run at a time (-1: every core)")
+    p.add_argument("--fast", action="store_true",
+                   help="coarser inspection plan (as 'mavac inspect --fast'): seconds, fewer guards")
+    p.add_argument("--out", help="JSON result (default: <mesh>_clean.json in $MAVAC_OUT or the current directory)")
+    p.add_argument("--csv", help="CSV, one row per heap per trial (default: <mesh>_clean.csv beside the JSON file)")
+    _common(p, role="machine")
+    p.set_defaults(func=cmd_clean)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .geometry.stain_marking import STAIN_GRAMMAR
     from .params import SETUP_COVER_METHODS
@@ -502,27 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
     _machine_options(p)
     p.set_defaults(func=cmd_reach)
 
-    p = sub.add_parser("clean", formatter_class=fmt, help="simulated cleaning of a machine (MAVAC online stage)",
-                       description="MAVAC's online loop on your machine, simulated in pybullet: green dust heaps "
-                                   "on every upward-facing surface, then, for each pose of the inspection plan, "
-                                   "look, detect the dust, plan an approach and vacuum it (Algorithm 1). The "
-                                   "inspection plan is computed first, as 'mavac inspect' does (its JSON file "
-                                   "keeps no surface elements, so it cannot be read back). Writes a JSON file "
-                                   "(summary, one entry per trial, parameters) and a CSV with one row per heap "
-                                   "per trial (position, cleaned, cause of the miss). The machine should be "
-                                   "0.3-5 m across.")
-    p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
-    p.add_argument("--spacing", type=float, default=None,
-                   help="distance between dust heaps, metres (default 0.10, the paper's)")
-    p.add_argument("--trials", type=int, default=1,
-                   help="trials, each with its own heap layout: seeds --seed .. --seed + trials - 1")
-    p.add_argument("--jobs", type=int, default=1, help="trials run at a time (-1: every core)")
-    p.add_argument("--fast", action="store_true",
-                   help="coarser inspection plan (as 'mavac inspect --fast'): seconds, fewer guards")
-    p.add_argument("--out", help="JSON result (default: <mesh>_clean.json in $MAVAC_OUT or the current directory)")
-    p.add_argument("--csv", help="CSV, one row per heap per trial (default: <mesh>_clean.csv beside the JSON file)")
-    _common(p, role="machine")
-    p.set_defaults(func=cmd_clean)
+    _clean_parser(sub, fmt)
     return parser
 
 
