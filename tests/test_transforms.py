@@ -90,3 +90,13 @@ def test_look_at_points_the_optical_axis_at_the_target():
     assert T[:3, 1] @ np.array([0.0, 0.0, 1.0]) < 0  # image y (down) points away from world up
     with pytest.raises(ValueError, match="differ"):
         look_at([0, 0, 0], [0, 0, 0])
+
+
+def test_transform_each_point_moves_point_k_by_pose_k():
+    rng = np.random.default_rng(4)
+    poses = np.tile(np.eye(4), (5, 1, 1))
+    poses[:, :3, :3] = tf.rz(rng.uniform(-3, 3, 5))
+    poses[:, :3, 3] = rng.normal(size=(5, 3))
+    points = rng.normal(size=(5, 3))
+    expected = np.array([tf.transform_points(T, p[None])[0] for T, p in zip(poses, points)])
+    assert np.allclose(tf.transform_each_point(poses, points), expected)

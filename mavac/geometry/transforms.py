@@ -143,6 +143,13 @@ def transform_points(a_T_b, points_b) -> np.ndarray:
     return np.asarray(points_b, dtype=float) @ T[:3, :3].T + T[:3, 3]
 
 
+def transform_each_point(a_T_bs, points_b) -> np.ndarray:
+    """Point k of frame *b_k* expressed in frame *a*, ``R_k p_k + t_k``: (n, 4, 4) and (n, 3) ->
+    (n, 3), no input checks (one point per pose, e.g. a contact per simulation step)."""
+    T = np.asarray(a_T_bs, dtype=float).reshape(-1, 4, 4)
+    return (np.asarray(points_b, dtype=float).reshape(-1, 1, 3) @ T[:, :3, :3].transpose(0, 2, 1))[:, 0] + T[:, :3, 3]
+
+
 def rotate_vectors(a_T_b, vectors_b) -> np.ndarray:
     """Directions of frame *b* expressed in frame *a*, ``R v``: (n, 3) -> (n, 3)."""
     return np.asarray(vectors_b, dtype=float) @ check_transform("a_T_b", a_T_b)[:3, :3].T

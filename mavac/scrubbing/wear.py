@@ -43,6 +43,7 @@ import numpy as np
 import trimesh
 
 from ..geometry.mesh import check_mesh
+from ..geometry.transforms import transform_each_point
 from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
 from ..validate import check_array, check_instance, check_int, check_points, check_positive
 from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
@@ -352,8 +353,7 @@ class ContactWear:
         The sums equal those of one step at a time: each face's increments are added in step
         order (``numpy.add.at``).
         """
-        T = np.asarray(part_T_world, dtype=float).reshape(-1, 4, 4)
-        c = (np.asarray(centres, dtype=float).reshape(-1, 1, 3) @ T[:, :3, :3].transpose(0, 2, 1))[:, 0] + T[:, :3, 3]
+        c = transform_each_point(part_T_world, centres)
         faces = self.tree.query_ball_point(c, self.radius) if len(c) else []
         counts = np.array([len(f) for f in faces], dtype=np.intp)
         index = np.fromiter(itertools.chain.from_iterable(faces), dtype=np.intp, count=int(counts.sum()))
