@@ -362,6 +362,7 @@ def cmd_clean(args) -> int:
 
     stem = Path(args.mesh).stem
     out, csv = _outputs(args, args.mesh, f"{stem}_clean", "csv", suffix="json")
+    html = _replay_output(args, out, csv)
     offline, online, seeds = _clean_setup(args)
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "inspection plan", "cleaning trials", "writing"], args.quiet)
@@ -378,9 +379,10 @@ def cmd_clean(args) -> int:
                              desc="cleaning trials", progress=_bars(args))
         _next(bar, "writing")
         doc, table = _clean_report(args, results, plan, offline, online)
-        with atomic_paths(out, csv) as (tmp_out, tmp_csv):
+        with atomic_paths(out, csv, html) as (tmp_out, tmp_csv, tmp_html):
             tmp_out.write_text(json.dumps(doc, indent=2, sort_keys=True, allow_nan=False))
             table.to_csv(tmp_csv, index=False, float_format="%.6g")
+            _replay_page(results[0], machine, tmp_html)
         _next(bar, "done")
     print(plan.summary())
     for r in results:
@@ -390,8 +392,29 @@ def cmd_clean(args) -> int:
         print(f"{stem}: {s['cleaned']} of {s['heaps']} heaps cleaned over {s['trials']} trials "
               f"({s['cleaning_pct']:.1f} %; mean of the trials {s['cleaning_pct_mean_of_trials']:.1f} %)")
     _print_frame(machine)
-    print(f"wrote {out} and {csv} in {time.perf_counter() - t0:.1f} s")
+    print(f"wrote {out}, {csv} and {html} in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def _replay_output(args, out: Path, csv: Path) -> Path:
+    """``clean``'s replay page: ``--html``, else beside the JSON file; checked before any work."""
+    if args.html is not None and not args.html.strip():
+        raise ValueError("--html is empty; give a file name")
+    html = Path(args.html).expanduser() if args.html is not None else out.with_suffix(".html")
+    for flag, other in (("the input mesh", Path(args.mesh)), ("--out", out), ("--csv", csv)):
+        if html.resolve() == other.resolve():
+            raise ValueError(f"--html {html} is {flag}; give another file name")
+    return _checked_output("--html", html)
+
+
+def _replay_page(result, machine, path: Path) -> None:
+    """The first trial's meshcat replay, or a page that says why there is none."""
+    if result.replay is not None:
+        result.to_html(path, machine)
+    else:
+        from html import escape
+
+        path.write_text(f"<!DOCTYPE html><title>{escape(machine.name)}</title><p>No replay: {escape(result.reason)}</p>\n")
 
 
 def _common(p: argparse.ArgumentParser, *, role: str) -> None:
@@ -441,8 +464,9 @@ def _clean_parser(sub, fmt) -> None:
                                    "look, detect the dust, plan an approach and vacuum it (Algorithm 1). The "
                                    "inspection plan is computed first, as 'mavac inspect' does (its JSON file "
                                    "keeps no surface elements, so it cannot be read back). Writes a JSON file "
-                                   "(summary, one entry per trial, parameters) and a CSV with one row per heap "
-                                   "per trial (position, cleaned, cause of the miss). The machine should be "
+                                   "(summary, one entry per trial, parameters), a CSV with one row per heap "
+                                   "per trial (position, cleaned, cause of the miss) and an HTML replay of the "
+                                   "first trial. The machine should be "
                                    "0.3-5 m across.")
     p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
     p.add_argument("--spacing", type=float, default=None,
@@ -454,6 +478,8 @@ def _clean_parser(sub, fmt) -> None:
                    help="coarser inspection plan (as 'mavac inspect --fast'): seconds, fewer guards")
     p.add_argument("--out", help="JSON result (default: <mesh>_clean.json in $MAVAC_OUT or the current directory)")
     p.add_argument("--csv", help="CSV, one row per heap per trial (default: <mesh>_clean.csv beside the JSON file)")
+    p.add_argument("--html", help="meshcat replay of the first trial: the robot through its poses, heaps vanishing as "
+                                  "they are vacuumed, misses coloured by cause (default: beside the JSON file)")
     _common(p, role="machine")
     p.set_defaults(func=cmd_clean)
 

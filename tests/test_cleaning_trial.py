@@ -270,3 +270,44 @@ def test_summary_and_heap_table_of_a_trial_without_heaps(small):
     assert r.heap_table().empty and list(r.heap_table().columns) == ["heap", "x", "y", "z", "cleaned", "cause"]
     text = r.summary()
     assert "0 of 0 heaps cleaned (0.0 %)" in text and "misses: none" in text and "reason: no heaps" in text
+
+
+def test_replay_follows_the_trial_clock_its_spots_and_its_heaps(two_spots, tmp_path, monkeypatch):
+    import mavac.viz.meshcat_scene as ms
+
+    machine, plan = two_spots
+    played, animate = {}, ms.animate
+    monkeypatch.setattr(ms, "animate", lambda vis, tracks, **kw: (played.update(kw), animate(vis, tracks, **kw)))
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    rp = r.replay
+    assert np.all(np.diff(rp.times) >= 0) and rp.times[0] == 0.0
+    assert rp.duration == pytest.approx(r.times.sim_time_s, abs=1e-9)
+    spots = np.unique(plan.poses[:, :3], axis=0)
+    assert all(np.any(np.all(np.isclose(b, spots), axis=1)) for b in np.unique(rp.bases, axis=0))
+    assert len(np.unique(rp.bases, axis=0)) == len(spots) > 1  # the replay drives between both spots
+    robot = T.ur10_mobile()
+    lo, hi = robot.model.lowerPositionLimit, robot.model.upperPositionLimit
+    assert np.all((rp.qs >= lo - 1e-6) & (rp.qs <= hi + 1e-6))
+    assert np.isfinite(rp.cleaned_at).tolist() == r.cleaned.tolist()  # vacuumed = cleaned, heap by heap
+    assert np.all((rp.cleaned_at[r.cleaned] > 0) & (rp.cleaned_at[r.cleaned] <= rp.duration))
+    page = r.to_html(tmp_path / "replay.html", machine).read_text()
+    assert sorted(played["hide_at"]) == sorted(f"heaps/{i}" for i in np.flatnonzero(r.cleaned))
+    assert f"{r.cleaning_pct:.1f} % of {r.n_heaps} heaps cleaned" in page
+    assert f"cleaned heap, vanishes when vacuumed ({r.n_cleaned})" in page
+    for cause, n in r.miss_counts().items():
+        assert (f"missed: {cause} ({n})" in page) == (n > 0)
+
+
+def test_replay_is_refused_without_a_trial_or_for_another_machine(small, tmp_path):
+    machine, plan = small
+    spire = machine_from_mesh(trimesh.creation.cone(radius=0.2, height=2.0, sections=8), name="spire")
+    empty = T.run_trial(spire, plan, params=PARAMS, seed=0)
+    assert empty.replay is None
+    with pytest.raises(ValueError, match="nothing to replay .no heaps"):
+        empty.to_html(tmp_path / "x.html", spire)
+    r = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    with pytest.raises(ValueError, match="machine must be the trial's machine 'box', got 'spire'"):
+        r.to_html(tmp_path / "x.html", spire)
+    with pytest.raises(TypeError, match="machine"):
+        r.to_html(tmp_path / "x.html", "box")
+    assert not list(tmp_path.iterdir())

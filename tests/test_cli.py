@@ -379,7 +379,9 @@ def cleaned(tmp_path_factory):
 def test_clean_writes_a_summary_json_and_one_csv_row_per_heap(cleaned):
     d, code = cleaned
     assert code == 0
-    assert sorted(p.name for p in (d / "out").iterdir()) == ["run.csv", "run.json"]  # the CSV takes --out's stem
+    # the CSV and the replay page take --out's stem
+    assert sorted(p.name for p in (d / "out").iterdir()) == ["run.csv", "run.html", "run.json"]
+    assert "mavac-legend" in (d / "out" / "run.html").read_text()
     doc = _strict_json(d / "out" / "run.json")
     table = pd.read_csv(d / "out" / "run.csv", keep_default_na=False)
     assert list(table.columns) == ["seed", "heap", "x", "y", "z", "cleaned", "cause"]
@@ -413,13 +415,17 @@ def test_clean_same_seed_gives_the_same_csv_byte_for_byte(cleaned, tmp_path, cap
     (["--jobs", "0"], "--jobs must be a positive worker count"),
     (["--seed", str(2**31 - 1), "--trials", "2"], "--seed 2147483647 with --trials 2"),
     (["--seed", "-3"], "--seed: seed must be in"),
+    (["--html", "{mesh}"], "--html {mesh} is the input mesh"),
+    (["--out", "{tmp}/r.json", "--html", "{tmp}/r.json"], "--html {tmp}/r.json is --out"),
+    (["--csv", "{tmp}/r.csv", "--html", "{tmp}/r.csv"], "--html {tmp}/r.csv is --csv"),
+    (["--html", ""], "--html is empty"),
 ])
 def test_clean_refuses_bad_input_before_any_work(cleaned, tmp_path, capsys, no_compute, argv, message):
     mesh = str(cleaned[0] / "box.stl")
-    argv = [a.format(mesh=mesh) for a in argv]
+    argv = [a.format(mesh=mesh, tmp=tmp_path) for a in argv]
     out = [] if "--out" in argv else ["--out", str(tmp_path / "x.json")]
     code, _, err = run(["clean", mesh, "--quiet", *out, *argv], capsys)
-    assert code == 1 and err.startswith(f"mavac clean: error: {message.format(mesh=mesh)}"), err
+    assert code == 1 and err.startswith(f"mavac clean: error: {message.format(mesh=mesh, tmp=tmp_path)}"), err
     assert "Traceback" not in err and not list(tmp_path.iterdir())
 
 

@@ -118,3 +118,18 @@ def test_screenshot_of_the_plan_is_not_blank(plan_html, tmp_path):
              for name, page in (("empty", empty), ("plan", plan_html))}
     # the empty page has a few hundred colours (gradient, grid); the plan many thousands
     assert shots["plan"] > 5 * shots["empty"], shots
+
+
+def test_hidden_nodes_vanish_at_their_frame_and_bad_frames_are_refused(tmp_path):
+    from mavac.viz import meshcat_scene as ms
+
+    with ms.scene() as vis:
+        ms.add_spheres(vis, "heaps", [[0, 0, 0], [1, 0, 0]], [(0, 1, 0), (1, 0, 0)], radius=0.05)
+        ms.animate(vis, {"heaps/0": np.tile(np.eye(4), (3, 1, 1))}, times=[0, 5, 9], hide_at={"heaps/1": 7})
+        page = ms.save_html(vis, tmp_path / "vanish.html")
+        with pytest.raises(ValueError, match=r"hide_at\['heaps/1'\] must be a frame >= 1, got 0"):
+            ms.animate(vis, {"heaps/0": np.tile(np.eye(4), (3, 1, 1))}, hide_at={"heaps/1": 0})
+    anim = next(c for c in commands(page.read_text()) if c["type"] == "set_animation")
+    clip = next(a["clip"] for a in anim["animations"] if a["path"] == "/meshcat/heaps/1")
+    track = next(t for t in clip["tracks"] if t["name"] == ".visible")
+    assert track["type"] == "boolean" and [(k["time"], k["value"]) for k in track["keys"]] == [(0, True), (7, False)]

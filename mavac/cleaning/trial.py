@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..geometry.machines import Machine
-from ..geometry.transforms import se2_to_matrix
+from ..geometry.transforms import matrix_to_se2, se2_to_matrix
 from ..params import OnlineParams
 from ..robots.kinematics import fk
 from ..robots.models import RobotModel, ur10_mobile
@@ -47,6 +47,7 @@ from .filters import FILTERS, filter_nodes
 from .heaps import heaps_for_trial
 from .misses import CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes, near_frustum
 from .motion import Motion, plan_arm_motion
+from .replay import Replay, ReplayRecorder
 from .scene import build_cell
 from .timing import TrialTimes, base_path_length
 from .vacuum import vacuum_area
@@ -106,6 +107,9 @@ class TrialResult:
         ``rrt_approach_seconds``).
     rrt_approach_seconds : list of float
         Wall time of every RRT-Connect approach plan, s.
+    replay : mavac.cleaning.replay.Replay or None
+        The robot's motion and each heap's removal time on the simulated clock (None when
+        nothing ran: no heaps, or an empty plan); :meth:`to_html` plays it.
     """
 
     machine: str
@@ -131,6 +135,7 @@ class TrialResult:
     warnings: list = field(default_factory=list)
     wall_s: float = 0.0
     rrt_approach_seconds: list = field(default_factory=list)
+    replay: Replay | None = None
 
     @property
     def n_heaps(self) -> int:
@@ -190,6 +195,32 @@ class TrialResult:
                              "cleaned": np.asarray(self.cleaned, dtype=bool),
                              "cause": np.asarray(self.causes).astype(str)})
 
+    def to_html(self, path, machine, *, robot=None):
+        """Write the trial's meshcat replay (:func:`mavac.viz.scenes.trial_replay_html`): the
+        robot through its poses, heaps vanishing as they are vacuumed, misses coloured by cause.
+
+        Parameters
+        ----------
+        path : str or Path
+            The HTML file.
+        machine : Machine
+            The machine the trial ran on.
+        robot : RobotModel, optional
+            The trial's robot (default: the UR10 on its mobile base).
+
+        Returns
+        -------
+        Path
+        """
+        from ..viz.scenes import trial_replay_html
+
+        check_instance("machine", machine, Machine)
+        if self.replay is None:
+            raise ValueError(f"this trial has nothing to replay ({self.reason or 'no replay recorded'})")
+        if machine.name != self.machine:
+            raise ValueError(f"machine must be the trial's machine {self.machine!r}, got {machine.name!r}")
+        return trial_replay_html(self, machine, path, robot=robot)
+
     def row(self) -> dict:
         """One trial's row: the Table 2 columns (``data/results/mavac_table2.csv``), then
         ``guards``, ``replanned``, ``guards_unreachable``, ``fold_failures``, ``folds_retraced``
@@ -217,6 +248,7 @@ class _Run:
         d = params.detection
         self.fov_y = float(np.degrees(2.0 * camera.theta_b))  # the FOV pyramid's height
         self.K = intrinsics_from_fov(d.width, d.height, self.fov_y)
+        self.recorder = ReplayRecorder(matrix_to_se2(cell.world_T_base), cell.q_cmd, result.n_heaps)
 
     def execute(self, plan) -> None:
         """Algorithm 1, line 1-3 and the loop: every pose of T in order, folding and driving
@@ -246,7 +278,9 @@ class _Run:
     def track(self, path) -> None:
         """Follow a joint path (its first row is the commanded configuration) and record it."""
         path = np.asarray(path, dtype=float)
-        self.result.times.arm_s += self.cell.track(path[1:], self.params)
+        seconds = self.cell.track(path[1:], self.params)
+        self.result.times.arm_s += seconds
+        self.recorder.arm_path(path, seconds)
         self.since_home.append(path)
 
     def fold_home(self, i: int) -> bool:
@@ -284,6 +318,7 @@ class _Run:
         start = cell.world_T_base[:2, 3]
         length = base_path_length(start, spot[:2], self.machine.footprint, self.params.base_clearance)
         self.result.times.base_s += length / self.params.base_speed
+        self.recorder.base_drive(spot, length / self.params.base_speed)
         cell.move_base(se2_to_matrix(*spot))
 
     def skip(self, poses, why: str) -> None:
@@ -361,6 +396,7 @@ class _Run:
         log = vacuum_area(cell, approach.world_T_approach, nodes[order], p.vacuum)
         self.vacuumed = np.vstack([self.vacuumed, nodes])
         self.result.times.vacuum_s += log.seconds
+        self.recorder.vacuuming(log.samples, log.sucked, log.sucked_at, log.seconds)
         self.result.peak_forces += log.peak_forces
         self.result.areas_cleaned += int(len(log.sucked) > 0)
         cell.q_cmd = np.array(approach.q, dtype=float)
@@ -420,6 +456,7 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
         run = _Run(cell, machine, params, seed, result, plan.params.camera)
         run.execute(plan)
         result.cleaned = cell.dust.cleaned.copy()
+        result.replay = run.recorder.replay()
     _score(result, run)
     result.wall_s = time.perf_counter() - t0
     return result

@@ -33,6 +33,9 @@ from ..validate import check_int, check_positive
 #: Ours: after the ramp, a move has settled when every joint is slower than this (rad/s), e.g.
 #: the sphere resting on the machine short of a node.
 SETTLED_JOINT_SPEED = 0.02
+#: Ours: the arm is sampled for the trial's replay every this many simulated seconds while it
+#: vacuums (10 keys a second, smooth enough for a viewer that interpolates between them)
+REPLAY_SAMPLE_S = 0.1
 
 
 @dataclass
@@ -49,12 +52,18 @@ class VacuumLog:
         Simulated time, s.
     reached : list of float, metres
         Closest the tool centre came to each node target.
+    sucked_at : list of float, s
+        When each heap of ``sucked`` was removed, from the area's start.
+    samples : list of (float, (nq,) float)
+        The arm's configuration every :data:`REPLAY_SAMPLE_S` s (time from the area's start, q).
     """
 
     peak_forces: list = field(default_factory=list)
     sucked: list = field(default_factory=list)
     seconds: float = 0.0
     reached: list = field(default_factory=list)
+    sucked_at: list = field(default_factory=list)
+    samples: list = field(default_factory=list)
 
 
 def _gains(params: VacuumParams) -> tuple[np.ndarray, np.ndarray]:
@@ -112,17 +121,21 @@ def _follow(cell, world_T_ref, waypoints, n_settle: int, params: VacuumParams, l
     target = np.array(world_T_ref, dtype=float)
     goal = waypoints[-1]
     peak, closest, n_move = 0.0, np.inf, len(waypoints)
+    every = max(1, round(REPLAY_SAMPLE_S / world.time_step))
     for k in range(n_move + n_settle):
         if k < n_move:  # the settling steps hold the last target
             target[:3, 3] = waypoints[k]
             base_T_target = base_T_world @ target
         q, dq = sim.state()
+        if k % every == 0:
+            log.samples.append((log.seconds + k * world.time_step, q))
         sim.apply_torques_unchecked(impedance_step(cell.model, cell.data, q, dq, cell.tool_id, base_T_target, K, D))
         world.step_once()
         tip = sim.link_position(cell.tool_frame)
         hit = dust.suck(tip, params.suction_radius)
         if len(hit):
             log.sucked += hit.tolist()
+            log.sucked_at += [log.seconds + (k + 1) * world.time_step] * len(hit)
         peak = max(peak, world.normal_force(sim.body, cell.machine_body))
         d = tip - goal
         gap = math.sqrt(d.dot(d))  # numpy's norm of a vector, without its overhead

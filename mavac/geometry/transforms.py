@@ -121,6 +121,13 @@ def se2_to_matrix(x: float, y: float, theta: float) -> np.ndarray:
     return se2_matrices(np.array([[x, y, theta]], dtype=float))[0]
 
 
+def matrix_to_se2(world_T_base) -> np.ndarray:
+    """``(x, y, theta)`` (3,), m and rad, of a base pose that turns about z only: the inverse
+    of :func:`se2_to_matrix` (theta in (-pi, pi])."""
+    T = check_transform("world_T_base", world_T_base)
+    return np.array([T[0, 3], T[1, 3], np.arctan2(T[1, 0], T[0, 0])])
+
+
 def _rigid(name: str, transforms) -> np.ndarray:
     """:func:`check_transforms`, keeping the shape given: (4, 4) stays (4, 4)."""
     T = check_array(name, transforms, float)

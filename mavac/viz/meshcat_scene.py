@@ -153,6 +153,24 @@ def add_points(vis, name: str, points, colors=None, size: float = 0.01) -> None:
     vis[name].set_object(g.PointCloud(pts.T, cols.T, size=size))
 
 
+def add_spheres(vis, name: str, centres, colors, radius: float = 0.02) -> None:
+    """Add one sphere node per centre, ``<name>/<i>`` (so each can be hidden or animated alone).
+
+    Parameters
+    ----------
+    centres : (n, 3) float, m
+    colors : (n, 3) float in [0, 1]
+    radius : float, m
+    """
+    import meshcat.geometry as g
+
+    T = np.eye(4)
+    for i, (p, c) in enumerate(zip(np.asarray(centres, float).reshape(-1, 3), colors)):
+        T[:3, 3] = p
+        vis[f"{name}/{i}"].set_object(g.Sphere(float(radius)), g.MeshLambertMaterial(color=_rgb_int(c)))
+        vis[f"{name}/{i}"].set_transform(T)
+
+
 def add_lines(vis, name: str, starts, ends, color=(0.9, 0.1, 0.1)) -> None:
     """Add line segments from ``starts`` (n, 3) to ``ends`` (n, 3)."""
     import meshcat.geometry as g
@@ -221,7 +239,8 @@ def robot_node_transforms(robot, qs, geometry: str = "collision") -> dict:
     return out
 
 
-def animate(vis, tracks: dict, times=None, fps: int = 30, repetitions: int = 1, play: bool = True) -> None:
+def animate(vis, tracks: dict, times=None, fps: int = 30, repetitions: int = 1, play: bool = True,
+            hide_at: dict | None = None) -> None:
     """Play node poses as a meshcat animation (kept in the static HTML, replayable in the controls).
 
     Parameters
@@ -233,6 +252,8 @@ def animate(vis, tracks: dict, times=None, fps: int = 30, repetitions: int = 1, 
         positions, spherically for rotations). Default ``0, 1, ..., k - 1``.
     fps : int
         Frames per second.
+    hide_at : dict, optional
+        Node path -> frame (int >= 1) from which the node is hidden (visible before it).
     """
     from meshcat.animation import Animation
 
@@ -251,6 +272,12 @@ def animate(vis, tracks: dict, times=None, fps: int = 30, repetitions: int = 1, 
         with anim.at_frame(vis, t) as frame:
             for path, poses in tracks.items():
                 frame[path].set_transform(poses[i])
+    for path, t in (hide_at or {}).items():
+        if int(t) < 1:
+            raise ValueError(f"hide_at[{path!r}] must be a frame >= 1, got {t}")
+        for key, shown in ((0, True), (int(t), False)):
+            with anim.at_frame(vis, key) as frame:
+                frame[path].set_property("visible", "boolean", shown)
     vis.set_animation(anim, play=play, repetitions=int(repetitions))
 
 

@@ -217,3 +217,73 @@ def reach_study_html(study, path, robot=None, cmap: str = "viridis"):
             notes=["robot: at the spot and configuration with the highest score",
                    f"{len(cands)} candidate spots: hidden layer 'spots' in the controls"])
         return ms.save_html(vis, path, legend=legend)
+
+
+#: Ours: a trial's replay plays this many times faster than simulated time (a 450 s trial in 45 s)
+REPLAY_SPEEDUP = 10.0
+#: Ours: a page with the robot frames at least this height, m (the UR10 on its base, arm raised)
+ROBOT_HEIGHT = 1.5
+#: Ours: heaps drawn as spheres of this radius, m (the suction radius' order, visible from 3 m)
+HEAP_RADIUS = 0.02
+
+
+def cause_colors(causes) -> dict:
+    """Miss cause -> RGB: matplotlib's tab10 without its green, which marks cleaned heaps."""
+    cmap = matplotlib.colormaps["tab10"]
+    palette = [cmap(i)[:3] for i in (3, 1, 4, 5, 6, 7, 8, 9, 0)]
+    return {cause: palette[i % len(palette)] for i, cause in enumerate(causes)}
+
+
+def _replay_keys(replay, robot, speedup: float):
+    """Frames (at :data:`FPS`) of the replay's keys, one key per frame (the last one wins), and
+    the robot's node tracks at them."""
+    frames = np.round(np.asarray(replay.times) * FPS / speedup).astype(np.int64)
+    last = np.r_[frames[1:] != frames[:-1], True]
+    keep = np.flatnonzero(last)
+    tracks = robot_tracks(robot, "robot", se2_matrices(replay.bases[keep]), replay.qs[keep])
+    return frames[keep], tracks
+
+
+def trial_replay_html(result, machine, path, *, robot=None, speedup: float = REPLAY_SPEEDUP):
+    """Meshcat replay of a cleaning trial (:class:`~mavac.cleaning.trial.TrialResult`).
+
+    The robot drives through its pose set as the trial executed it; each cleaned heap (green)
+    vanishes when it is vacuumed; missed heaps stay, coloured by their cause, with a legend.
+
+    Parameters
+    ----------
+    result : TrialResult
+        With its :attr:`~mavac.cleaning.trial.TrialResult.replay`.
+    machine : mavac.geometry.machines.Machine
+        The trial's machine.
+    path : str or Path
+        The HTML file (written atomically).
+    robot : RobotModel, optional
+        The trial's robot (default: the UR10 on its mobile base).
+    speedup : float, > 0
+        Replay speed over simulated time.
+    """
+    from ..cleaning.misses import CAUSES
+    from ..robots.models import ur10_mobile
+
+    robot = ur10_mobile() if robot is None else robot
+    replay, colors = result.replay, cause_colors(CAUSES)
+    with ms.scene() as vis:
+        ms.add_mesh(vis, "machine", machine.mesh, color=GREY, opacity=0.85)
+        fate = [GREEN if c else colors[str(cause)] for c, cause in zip(result.cleaned, result.causes)]
+        ms.add_spheres(vis, "heaps", result.heaps, fate, radius=HEAP_RADIUS)
+        ms.add_robot(vis, "robot", robot, replay.qs[0], world_T_base=se2_matrices(replay.bases[:1])[0])
+        frames, tracks = _replay_keys(replay, robot, speedup)
+        gone = np.flatnonzero(np.isfinite(replay.cleaned_at))
+        hide = {f"heaps/{i}": max(1, int(round(replay.cleaned_at[i] * FPS / speedup))) for i in gone}
+        ms.animate(vis, tracks, times=frames, fps=FPS, hide_at=hide)
+        lo, hi = frame_box(*machine.mesh.bounds, [np.column_stack([replay.bases[:, :2], np.zeros(len(replay.bases))])])
+        ms.frame_camera(vis, lo, np.maximum(hi, [hi[0], hi[1], ROBOT_HEIGHT]))
+        misses = result.miss_counts()
+        entries = [(GREEN, f"cleaned heap, vanishes when vacuumed ({result.n_cleaned})")]
+        entries += [(colors[c], f"missed: {c} ({n})") for c, n in misses.items() if n]
+        legend = ms.legend_html(entries, title=f"{result.machine}, seed {result.seed}: {result.cleaning_pct:.1f} % "
+                                               f"of {result.n_heaps} heaps cleaned (simulated)",
+                                notes=[f"replay at {speedup:g}x: {replay.duration:.0f} s of simulated time "
+                                       f"in {replay.duration / speedup:.0f} s; replay under Animations"])
+        return ms.save_html(vis, path, legend=legend)
