@@ -100,3 +100,11 @@ def test_transform_each_point_moves_point_k_by_pose_k():
     points = rng.normal(size=(5, 3))
     expected = np.array([tf.transform_points(T, p[None])[0] for T, p in zip(poses, points)])
     assert np.allclose(tf.transform_each_point(poses, points), expected)
+
+
+def test_matrix_to_se2_inverts_se2_to_matrix():
+    for pose in ([0.3, -1.2, 0.0], [2.0, 0.5, 3.0], [-1.0, 4.0, -2.5], [0.0, 0.0, np.pi]):
+        back = tf.matrix_to_se2(tf.se2_to_matrix(*pose))
+        np.testing.assert_allclose(back, pose, atol=1e-12)
+    with pytest.raises(ValueError, match="world_T_base"):
+        tf.matrix_to_se2(np.eye(3))
