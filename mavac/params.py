@@ -951,9 +951,18 @@ class BimanualCellParams(CheckedFields):
     # iiwa while scrubbing: weak, so the pull towards the start posture never fights the task.
     null_stiffness: float = ranged(2.0, gt=0.0)
     null_damping: float = ranged(0.1, gt=0.0)
-    # Ours: the normal-force integral is clipped to +-force_integral_limit x f_n (anti-windup
-    # while the pad lands or lifts).
+    # Ours: the normal-force integral is clipped to +-force_integral_limit x f_n. It integrates
+    # only while the pad touches the part and restarts from 0 when contact is lost (conditional
+    # integration, the standard anti-windup), so the clip is a last resort.
     force_integral_limit: float = ranged(2.0, gt=0.0)
+    # Ours: the Lissajous force ramps in linearly over this many periods of its slower (y)
+    # axis after each landing, so the pad settles under f_n before it is pushed sideways
+    # (Kabir Sec. VIII overlays the oscillation on the path but says nothing of its start).
+    lissajous_ramp_periods: float = ranged(1.0, ge=0.0)
+    # Ours: wear goes only to faces within this distance (m), along the pad axis, of the real
+    # surface under the pad (the contact points on the part's exact mesh); 2 mm is the pad's
+    # compression at 20 N under pad_stiffness, the deepest the pad face reaches into the part.
+    wear_depth: float = ranged(0.002, gt=0.0)
     # pybullet_data's kuka_iiwa/model.urdf: joint effort 300 N m, the motor force of a braked arm.
     brake_torque: float = ranged(300.0, gt=0.0)
     # Ours: the held part's rotational inertia is that of a sphere of this radius (m) and of

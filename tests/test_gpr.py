@@ -62,6 +62,23 @@ def test_unreachable_threshold_is_infeasible_within_budget():
     assert experiments_to_reach(result.history, dense_optimum(Analytic(params).mean, params)) is None
 
 
+def test_a_known_constraint_is_part_of_the_feasibility_rule():
+    """The cell's path-deviation cap (here 4 mm, below the analytic optimum's ~6 mm swing):
+    no point outside it is run or chosen; without the rule the learner runs such points."""
+    from mavac.scrubbing.lissajous import vector_excursions
+
+    params = dataclasses.replace(FAST, max_experiments=40)
+    names = ["v", "f_n", "kappa", "f_x", "A_x"]
+    free = learn_parameters(Analytic(params), params, rng=np.random.default_rng(5))
+    assert (vector_excursions(free.history[names].to_numpy()) > 0.004).any()
+    capped = learn_parameters(Analytic(params), params, rng=np.random.default_rng(5),
+                              admissible=lambda X: vector_excursions(X) <= 0.004)
+    assert np.all(vector_excursions(capped.history[names].to_numpy()) <= 0.004)
+    assert capped.feasible and vector_excursions(np.array([[capped.chosen[n] for n in names]]))[0] <= 0.004
+    with pytest.raises(ValueError, match="admissible"):
+        learn_parameters(Analytic(params), params, admissible=lambda X: np.zeros(len(X), bool))
+
+
 def test_same_seed_same_result():
     params = dataclasses.replace(FAST, max_experiments=36)
     a = learn_parameters(Analytic(params), params, rng=np.random.default_rng(3))

@@ -109,7 +109,7 @@ def test_schedule_alternates_contact_and_repositioning():
     pp = PassPath(1, np.arange(2), [seg1, seg2], [up, up], [move])
     s = schedule_for_pass(pp, BOWL, ToolpathParams(), 0.002)
     changes = np.flatnonzero(np.diff(s.contact.astype(int)))
-    assert len(changes) == 2 and s.contact[0] and s.contact[-1]
+    assert len(changes) == 3 and not s.contact[0] and s.contact[-1]  # lands, scrubs, moves, scrubs
     assert np.allclose(s.forces[s.contact, 2], BOWL.f_n)
     assert np.all(s.forces[~s.contact] == 0)
     free = s.positions[~s.contact]
@@ -143,3 +143,140 @@ def test_cell_gains_limits_and_masses_are_parameters():
                       ("wrist_inertia", -1.0), ("force_integral_limit", 0.0)):
         with pytest.raises(ValueError, match=name):
             dataclasses.replace(CELL, **{name: bad})
+
+
+def _log(force, touch, cmd, f_n=10.0):
+    """A ScrubLog of given per-step forces, pad contacts and commanded contact (nothing else touching)."""
+    from mavac.scrubbing.scrub import ScrubLog
+
+    m = len(force)
+    cmd = np.asarray(cmd, bool)
+    return ScrubLog(np.arange(1, m + 1) * 0.002, np.asarray(force, float), np.asarray(touch, bool), cmd,
+                    np.where(cmd, f_n, 0.0), np.zeros(m, bool), np.zeros((m, 3)), np.zeros((m, 3), int),
+                    np.zeros(m), np.zeros((m, 3)), np.zeros(4), 0.0, 0.0)
+
+
+def test_a_pass_where_the_pad_leaves_the_part_shows_it():
+    # 10 commanded steps, the pad off the part on 4 of them (at 12 N on the others), then 2
+    # repositioning steps where it brushes the part
+    touch = [True] * 6 + [False] * 4 + [True, False]
+    force = [12.0] * 6 + [0.0] * 4 + [3.0, 0.0]
+    row = _log(force, touch, [True] * 10 + [False] * 2).row()
+    assert row["commanded_steps"] == 10 and row["contact_steps"] == 6
+    assert row["duty"] == pytest.approx(0.6)
+    assert row["mean_force_all_n"] == pytest.approx(7.2)  # 0 N counted while off the part
+    assert row["force_error_all"] == pytest.approx(-0.28)
+    assert row["force_error_contact"] == pytest.approx(0.2)
+    assert row["force_rms_all"] == pytest.approx(np.sqrt((6 * 4 + 4 * 100) / 10) / 10)
+    assert row["pad_touch_outside_steps"] == 1
+    assert row["contact_s"] == pytest.approx(6 * 0.002)
+    assert not row["failed"]
+
+
+def test_any_contact_but_the_pad_fails_the_pass():
+    log = _log([10.0] * 4, [True] * 4, [True] * 4)
+    log.other[2, 1], log.other_count[2, 1] = 40.0, 2  # the arms touched once
+    row = log.row()
+    assert row["failed"] and row["arm_arm_steps"] == 1 and row["arm_arm_peak_n"] == 40.0
+    assert row["nonpad_part_steps"] == 0 and row["arm_floor_steps"] == 0
+
+
+def test_force_integral_only_while_the_pad_is_on_the_part():
+    from mavac.scrubbing.scrub import Gains, _scrub_torques
+
+    cleaner, _ = cell_robots(CELL)
+    robot = cleaner.model
+    q, dq = cleaner.q_home, np.zeros(7)
+    data = robot.createData()
+    import pinocchio as pin
+
+    fid = robot.getFrameId(cleaner.tool_frame)
+    pin.computeJointJacobians(robot, data, q)
+    pin.updateFramePlacements(robot, data)
+    J, T = pin.getFrameJacobian(robot, data, fid, pin.LOCAL_WORLD_ALIGNED), data.oMf[fid]
+    n = 400
+    sched = Schedule(np.tile(T.translation, (n, 1)), np.repeat(T.rotation[None], n, 0),
+                     np.tile([0.0, 0.0, 10.0], (n, 1)), np.ones(n, bool))
+    g = Gains.of(CELL, 5000.0)
+    state = {"integral": 0.0, "touch": False, "saturated": False}
+    for i in range(n):  # off the part, 0 N measured: nothing may wind up
+        _scrub_torques(robot, q, dq, J, T, sched, i, g, state, 0.0, 0.002)
+        assert state["integral"] == 0.0 and not state["saturated"]
+    state["touch"] = True
+    for i in range(n):  # on the part at 0 N: it integrates up to its clip, and says so
+        _scrub_torques(robot, q, dq, J, T, sched, i, g, state, 0.0, 0.002)
+    assert state["integral"] == pytest.approx(CELL.force_integral_limit * 10.0) and state["saturated"]
+    state["touch"] = False  # contact lost: the integral restarts from 0
+    _scrub_torques(robot, q, dq, J, T, sched, 0, g, state, 0.0, 0.002)
+    assert state["integral"] == 0.0
+
+
+def test_each_pass_lands_from_its_approach_point_and_the_oscillation_ramps_in():
+    seg = np.column_stack([np.linspace(0, 0.05, 11), np.zeros(11), np.zeros(11)])
+    pp = PassPath(1, np.arange(1), [seg], [np.tile([0.0, 0.0, 1.0], (11, 1))])
+    s = schedule_for_pass(pp, BOWL, ToolpathParams(), 0.002, ramp_periods=1.0)
+    assert not s.contact[0] and s.positions[0, 2] == pytest.approx(0.02)  # the approach point, lift above
+    first = np.flatnonzero(s.contact)[0]
+    assert np.allclose(s.positions[first], seg[0])
+    lateral = np.linalg.norm(s.forces[s.contact, :2], axis=1)
+    ramp = int(round(1.0 / BOWL.f_y / 0.002))
+    assert lateral[:ramp // 10].max() < 0.15 * BOWL.A_x  # the overlay starts near 0 N ...
+    assert lateral[ramp:].max() > 0.9 * BOWL.A_x  # ... and reaches its amplitude after the ramp
+
+
+def test_an_oscillation_wider_than_the_pad_is_refused():
+    from mavac.scrubbing.lissajous import excursion, vector_excursions
+
+    # the coupon-learned hull parameters of the review: A = 60 N at kappa = 1017 N/m
+    wide = lissajous_from_vector(np.array([[0.6, 14.66, 1017.0, 11.96, 60.0]]))
+    assert excursion(wide) > ToolpathParams().tool_width_m
+    assert vector_excursions(np.array([[0.6, 14.66, 1017.0, 11.96, 60.0]]))[0] == pytest.approx(excursion(wide))
+    seg = np.column_stack([np.linspace(0, 0.05, 11), np.zeros(11), np.zeros(11)])
+    pp = PassPath(1, np.arange(1), [seg], [np.tile([0.0, 0.0, 1.0], (11, 1))])
+    with pytest.raises(ValueError, match="lissajous"):
+        schedule_for_pass(pp, wide, ToolpathParams(), 0.002)
+    schedule_for_pass(pp, BOWL, ToolpathParams(), 0.002)  # the paper's 8.5 mm is fine
+
+
+def test_the_coupon_stroke_logs_only_the_pad(stroke_log):
+    row = stroke_log.row()
+    assert row["commanded_steps"] > 500 and 0.5 < row["duty"] <= 1.0
+    assert row["nonpad_part_steps"] == 0 and row["arm_arm_steps"] == 0 and row["arm_floor_steps"] == 0
+    assert not row["failed"]
+    assert row["wear_depth_max_mm"] <= 1e3 * CELL.wear_depth
+
+
+def test_the_pad_meets_the_exact_concave_part_while_it_is_fixed():
+    """A channel (5 mm floor, 30 mm walls): a ball dropped into it settles on the floor of the
+    fixed part's exact mesh, not on the held copy's convex hull 30 mm higher."""
+    import trimesh
+
+    from mavac.geometry.transforms import transform_points
+    from mavac.scrubbing.scene import fix_part, release_part
+
+    plate = trimesh.creation.box((0.08, 0.08, 0.005))
+    plate.apply_translation((0.0, 0.0, 0.0025))
+    walls = [trimesh.creation.box((0.005, 0.08, 0.035)) for _ in range(2)]
+    walls[0].apply_translation((-0.0375, 0.0, 0.0175))
+    walls[1].apply_translation((0.0375, 0.0, 0.0175))
+    channel = trimesh.util.concatenate([plate, *walls])
+    from mavac.scrubbing.coupon import COUPON_SETUP
+
+    cleaner, holder = cell_robots(CELL)
+    q = holder_ik(holder, base_T_part(np.array([COUPON_SETUP]), CELL.space), CELL).q[0]  # the part level
+    with SimWorld(time_step=CELL.time_step) as world:
+        cell = open_cell(world, cleaner, holder, channel, q, params=CELL, pad_width=0.03)
+        world.step(100)
+        fixed = fix_part(cell)
+        assert cell.scrubbed == fixed != cell.part and fix_part(cell) == fixed
+        T = world_T_part(cell)
+        ball = trimesh.creation.icosphere(subdivisions=2, radius=0.008)
+        start = np.eye(4)
+        start[:3, 3] = transform_points(T, np.array([[0.0, 0.0, 0.06]]))[0]
+        body = world.add_dynamic_mesh(ball.vertices, ball.faces, mass=0.02, world_T_mesh=start)
+        world.ignore_contacts(body, cell.part)  # the held copy: its convex hull would catch the ball
+        world.step(400)
+        z = transform_points(np.linalg.inv(world_T_part(cell)), world.body_pose(body)[None, :3, 3])[0, 2]
+        assert z == pytest.approx(0.005 + 0.008, abs=0.003)
+        release_part(cell)
+        assert cell.fixed_part is None and cell.scrubbed == cell.part

@@ -129,18 +129,40 @@ def test_contact_wear_of_many_steps_equals_one_step_at_a_time(stained_sphere):
     world_T_part[:, :3, :3] = Rotation.from_rotvec(rng.normal(0.0, 0.3, (n, 3))).as_matrix()
     world_T_part[:, :3, 3] = rng.normal(0.0, 0.02, (n, 3))
     part_T_world = np.linalg.inv(world_T_part)
-    # contact centroids near the surface, many faces under the pad, overlapping from step to step
-    centres = np.einsum("nij,nj->ni", world_T_part[:, :3, :3], mesh.vertices[rng.integers(0, len(mesh.vertices), n)])
-    centres += world_T_part[:, :3, 3]
+    # contact centroids on the surface, the pad axis into it, overlapping from step to step
+    local = mesh.vertices[rng.integers(0, len(mesh.vertices), n)]
+    centres = np.einsum("nij,nj->ni", world_T_part[:, :3, :3], local) + world_T_part[:, :3, 3]
+    axes = np.einsum("nij,nj->ni", world_T_part[:, :3, :3], -local / np.linalg.norm(local, axis=1, keepdims=True))
     pressure, sliding = rng.uniform(1e3, 5e4, n), rng.uniform(0.0, 1e-3, n)
-    wear = ContactWear(mesh, 0.03, 2e-4)
-    wear.add_steps(part_T_world, centres, pressure, sliding)
-    # the loop it replaces: each step's faces within the pad of its centroid (part frame)
+    wear = ContactWear(mesh, 0.03, 2e-4, depth=0.002)
+    wear.add_steps(part_T_world, centres, axes, pressure, sliding)
+    # the loop it replaces: each step's faces under the pad (part frame)
     expected = np.zeros(len(mesh.faces))
-    for T, c, p, s in zip(part_T_world, centres, pressure, sliding):
-        faces = wear.tree.query_ball_point(transform_points(T, c[None])[0], 0.03)
-        expected[faces] += 2e-4 * p * s
+    for T, c, a, p, s in zip(part_T_world, centres, axes, pressure, sliding):
+        c, a = transform_points(T, c[None])[0], T[:3, :3] @ a
+        rel = mesh.triangles_center - c
+        along = rel @ a
+        under = ((np.abs(along) <= 0.002) & (np.linalg.norm(rel - along[:, None] * a, axis=1) <= 0.03)
+                 & (mesh.face_normals @ a < 0))
+        expected[under] += 2e-4 * p * s
     assert np.count_nonzero(expected) > 20
-    np.testing.assert_array_equal(wear.removal, expected)
-    wear.add_steps(np.zeros((0, 4, 4)), np.zeros((0, 3)), [], [])
-    np.testing.assert_array_equal(wear.removal, expected)
+    np.testing.assert_allclose(wear.removal, expected, rtol=1e-12, atol=0)
+    assert wear.deepest <= 0.002
+    wear.add_steps(np.zeros((0, 4, 4)), np.zeros((0, 3)), np.zeros((0, 3)), [], [])
+    np.testing.assert_allclose(wear.removal, expected, rtol=1e-12, atol=0)
+
+
+def test_contact_wear_only_where_the_pad_is():
+    """A pad on the rim of a bowl-like shell: the faces 5 mm under it (the inside floor, and
+    the back of a thin wall) get no wear; the convex hull's ball of old credited them."""
+    top = trimesh.creation.box((0.1, 0.1, 0.001)).subdivide_to_size(0.004)  # top face at z = +0.5 mm
+    below = top.copy()
+    below.apply_translation((0.0, 0.0, -0.005))  # a second plate 5 mm under it
+    mesh = trimesh.util.concatenate([top, below])
+    wear = ContactWear(mesh, 0.015, 1e-4, depth=0.002)
+    T = np.eye(4)[None]
+    wear.add_steps(T, np.array([[0.0, 0.0, 0.0005]]), np.array([[0.0, 0.0, -1.0]]), [1e4], [1e-3])
+    z = mesh.triangles_center[:, 2]
+    assert wear.removal[z > 0.0004].sum() > 0  # the top face under the pad
+    assert np.all(wear.removal[z < 0.0004] == 0)  # its underside (facing away) and the lower plate
+    assert wear.deepest <= 0.002

@@ -113,3 +113,23 @@ def test_weld_contacts_brakes_and_velocity():
             world.weld(sim.body, link, body, parent_position=(0.0, 0.0))
         with pytest.raises(ValueError, match="max_torque"):
             sim.brake(robot.q_home, 0.0)
+
+
+def test_contacts_of_lists_every_contact_and_ignoring_is_undone():
+    with SimWorld(time_step=1 / 240) as world:
+        floor = world.add_floor()
+        box = trimesh.creation.box((0.05, 0.05, 0.05))
+        T = np.eye(4)
+        T[2, 3] = 0.024
+        body = world.add_dynamic_mesh(box.vertices, box.faces, mass=0.2, world_T_mesh=T)
+        world.step(20)
+        table = world.contacts_of(body)
+        assert len(table.body_b) >= 1 and np.all(table.body_b == floor) and np.all(table.link_a == -1)
+        assert table.normal_force.sum() == pytest.approx(0.2 * 9.81, rel=0.05)
+        assert table.positions_b[:, 2] == pytest.approx(np.zeros(len(table.body_b)), abs=2e-3)
+        world.ignore_contacts(floor, body)
+        world.step(1)
+        assert len(world.contacts_of(body).body_b) == 0
+        world.ignore_contacts(floor, body, collide=True)
+        world.step(1)
+        assert len(world.contacts_of(body).body_b) > 0

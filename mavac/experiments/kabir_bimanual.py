@@ -18,6 +18,7 @@ from ..params import BimanualCellParams, GPRParams, ToolpathParams
 from ..scrubbing.cell import cell_robots, flange_T_part
 from ..scrubbing.coupon import CouponCell
 from ..scrubbing.gpr import learn_parameters
+from ..scrubbing.lissajous import vector_excursions
 from ..scrubbing.run import OPERATION, PartRun, paper_operation
 from ..scrubbing.wear import lissajous_from_vector
 from ..seeding import rng_for
@@ -37,6 +38,10 @@ def learn_on_coupon(part: str, experiment: CouponCell, *, budget: int, seed: int
     """GPR learner (Sec. VIII) with the paper's thresholds for ``part``, on the coupon in the cell
     (``experiment``, an open :class:`CouponCell`).
 
+    The learner's feasibility rule also refuses every point whose oscillation would swing the
+    pad more than one pad width off its path (the cell's path-deviation cap,
+    :func:`mavac.scrubbing.lissajous.vector_excursions`): such points are never run.
+
     Returns
     -------
     (GPRResult, LissajousParams)
@@ -45,7 +50,9 @@ def learn_on_coupon(part: str, experiment: CouponCell, *, budget: int, seed: int
     """
     cp_th, p_th = paper_thresholds(part)
     params = GPRParams(Cp_th=cp_th, P_th=p_th, max_experiments=budget, seed=seed)
-    result = learn_parameters(experiment, params, rng=rng_for(seed, "coupon gpr"))
+    cap = experiment.toolpath.tool_width_m  # the cell's path-deviation cap: one pad width
+    result = learn_parameters(experiment, params, rng=rng_for(seed, "coupon gpr"),
+                              admissible=lambda X: vector_excursions(X) <= cap)
     x = paper_operation(part) if not result.feasible else [result.chosen[k] for k in OPERATION]
     return result, lissajous_from_vector(np.asarray(x, float)[None])
 
@@ -73,31 +80,64 @@ def table7(runs: dict) -> pd.DataFrame:
                                                      "planning_time")})
 
 
+#: Columns of ``kabir_execution.csv``: the pass, then every contact measure of
+#: :meth:`mavac.scrubbing.scrub.ScrubLog.row`, then what the camera saw.
+EXECUTION_COLUMNS = ["part", "parameters", "setup", "pass", "path_length_m", "commanded_steps", "contact_steps",
+                     "duty", "contact_s", "f_n_n", "mean_force_all_n", "force_error_all", "force_rms_all",
+                     "mean_normal_force_n", "force_error_contact", "force_rms_contact", "integral_saturated_steps",
+                     "integral_saturated_share", "nonpad_part_steps", "nonpad_part_peak_n", "arm_arm_steps",
+                     "arm_arm_peak_n", "arm_floor_steps", "arm_floor_peak_n", "pad_touch_outside_steps", "failed",
+                     "max_deviation_mm", "wear_depth_max_mm", "sliding_m", "residue_fraction", "C_p"]
+
+
 def execution_table(runs: dict) -> pd.DataFrame:
-    """``kabir_execution.csv``: one row per part, round, setup and pass (SIMULATED)."""
+    """``kabir_execution.csv``: one row per part, parameter set, round, setup and pass (SIMULATED).
+
+    ``runs`` maps ``(part, parameters)`` (e.g. ``("hull", "learned")``) to a PartRun.
+    """
     frames = []
-    for name, run in runs.items():
+    for (name, source), run in runs.items():
         df = pd.DataFrame(run.execution.rows)
+        df.insert(0, "parameters", source)
         df.insert(0, "part", name)
         frames.append(df)
     df = pd.concat(frames, ignore_index=True).rename(columns={"pass_": "pass"})
-    return df[["part", "setup", "pass", "path_length_m", "contact_s", "mean_normal_force_n", "residue_fraction",
-               "C_p", "f_n_n", "sliding_m"]]
+    return df[EXECUTION_COLUMNS]
 
 
-def summary_table(runs: dict) -> pd.DataFrame:
-    """Per part: stain removed, re-plan rounds, force tracking error, learned parameters (SIMULATED)."""
+def summary_table(runs: dict, execution: pd.DataFrame) -> pd.DataFrame:
+    """Per part and parameter set (keys of ``runs`` as in :func:`execution_table`; its table
+    ``execution``): stain removed, re-plan rounds, and over ALL passes the least duty, the force
+    errors over all commanded steps and over contact steps (step-weighted), the integral's
+    saturated share, the contact steps no plan allows, failed passes and the deepest wear
+    (SIMULATED)."""
     rows = []
-    for name, run in runs.items():
-        forces = np.concatenate(run.execution.forces) if run.execution.forces else np.zeros(0)
-        mean = float(forces.mean()) if forces.size else float("nan")
-        rows.append(dict(part=name, stain_removed=run.stain_removed, replan_rounds=run.rounds,
-                         setups_executed=len(run.execution.setup_times), passes=len(run.execution.rows),
-                         f_n_commanded=run.lissajous.f_n, mean_contact_force=mean,
-                         force_error=abs(mean - run.lissajous.f_n) / run.lissajous.f_n,
+    for (name, source), run in runs.items():
+        ex = execution[(execution["part"] == name) & (execution["parameters"] == source)]
+        cmd, on = ex["commanded_steps"].to_numpy(), ex["contact_steps"].to_numpy()
+        f_n = run.lissajous.f_n
+        rows.append(dict(part=name, parameters=source, stain_removed=run.stain_removed, replan_rounds=run.rounds,
+                         setups_executed=len(run.execution.setup_times), passes=len(ex), f_n_commanded=f_n,
+                         duty_min=ex["duty"].min(), duty=on.sum() / cmd.sum(),
+                         force_error_all=_weighted(ex["force_error_all"], cmd),
+                         force_rms_all=np.sqrt(_weighted(ex["force_rms_all"] ** 2, cmd)),
+                         force_error_contact=_weighted(ex["force_error_contact"], on),
+                         force_rms_contact=np.sqrt(_weighted(ex["force_rms_contact"] ** 2, on)),
+                         integral_saturated_share=ex["integral_saturated_steps"].sum() / cmd.sum(),
+                         nonpad_part_steps=ex["nonpad_part_steps"].sum(), arm_arm_steps=ex["arm_arm_steps"].sum(),
+                         arm_floor_steps=ex["arm_floor_steps"].sum(), failed_passes=int(ex["failed"].sum()),
+                         pad_touch_outside_steps=ex["pad_touch_outside_steps"].sum(),
+                         wear_depth_max_mm=ex["wear_depth_max_mm"].max(),
                          residue_final=run.execution.rows[-1]["residue_fraction"] if run.execution.rows else np.nan,
                          faces_unseen=run.unseen_faces, wall_s=run.seconds))
     return pd.DataFrame(rows)
+
+
+def _weighted(values, weights) -> float:
+    """Mean of per-pass ``values`` weighted by their step counts (NaN passes left out)."""
+    v, w = np.asarray(values, float), np.asarray(weights, float)
+    ok = np.isfinite(v) & (w > 0)
+    return float((v[ok] * w[ok]).sum() / w[ok].sum()) if ok.any() else float("nan")
 
 
 # ---------------------------------------------------------------- figures and replay

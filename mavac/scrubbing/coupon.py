@@ -19,7 +19,7 @@ from ..sim.world import SimWorld
 from ..validate import check_instance
 from .cell import cell_robots, holder_ik
 from .residue import StainState, perceive
-from .scene import open_cell, world_T_part
+from .scene import fix_part, open_cell, world_T_part
 from .scrub import approach, run_schedule, schedule_for_pass
 from .toolpath import PassPath
 from .wear import lissajous_from_vector
@@ -91,6 +91,7 @@ class CouponCell:
             self.cell = open_cell(self.world, self.cleaner, self.holder, self.part.mesh, q, params=self.params,
                                   pad_width=self.toolpath.tool_width_m)
             self.world.step(SETTLE_STEPS)
+            fix_part(self.cell)
             Tp = world_T_part(self.cell)
             xs = np.linspace(-STROKE_LENGTH / 2, STROKE_LENGTH / 2, STROKE_POINTS)
             local = np.column_stack([xs, np.zeros_like(xs), np.full_like(xs, STROKE_HEIGHT), np.ones_like(xs)])
@@ -117,7 +118,8 @@ class CouponCell:
     def _stroke(self, x, rng: np.random.Generator) -> float:
         lis = lissajous_from_vector(np.asarray(x, float)[None])
         state = StainState.from_part(self.part, rng_for(self.seed, "coupon hardness"), image_size=COUPON_IMAGE)
-        sched = schedule_for_pass(self.stroke, lis, self.toolpath, self.world.time_step)
+        sched = schedule_for_pass(self.stroke, lis, self.toolpath, self.world.time_step,
+                                  ramp_periods=self.params.lissajous_ramp_periods)
         cleaner, brake_torque = self.cell.cleaner, self.params.brake_torque
         if self.q_start is None:
             approach(self.cell, sched, self.toolpath.lift_height_m, lis)

@@ -267,7 +267,8 @@ def _check_learner_inputs(experiment, params, rng) -> None:
 
 
 def learn_parameters(experiment, params: GPRParams = GPRParams(),
-                     *, rng: np.random.Generator | None = None, progress: bool = False) -> GPRResult:
+                     *, rng: np.random.Generator | None = None, progress: bool = False,
+                     admissible=None) -> GPRResult:
     """Learn operation parameters meeting ``C_p >= C_p^th`` (Kabir, Sec. VIII); see the module doc.
 
     Parameters
@@ -279,15 +280,25 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
         Drives candidates and the experiment's noise; default the stream "gpr" of ``params.seed`` (:func:`mavac.seeding.rng_for`).
     progress : bool
         tqdm bar over experiments.
+    admissible : callable ``(X (n, 5)) -> (n,) bool``, optional
+        A known constraint of the robot (e.g. the cell's path-deviation cap,
+        :func:`mavac.scrubbing.lissajous.vector_excursions`): a point outside it is never run
+        nor chosen -- part of the feasibility rule, beside ``P(C_p >= C_p^th) >= P_th``.
 
     Returns
     -------
     GPRResult
     """
     _check_learner_inputs(experiment, params, rng)
+    if admissible is not None:
+        check_callable("admissible", admissible, "(X (n, 5)) -> (n,) bool")
     rng = rng_for(params.seed, "gpr") if rng is None else rng
+    allowed = (lambda X: np.ones(len(X), dtype=bool)) if admissible is None else admissible
     rows: list = []
     grid = coarse_grid(params)
+    grid = grid[np.asarray(allowed(grid), dtype=bool)]
+    if len(grid) == 0:
+        raise ValueError("admissible: it refuses every point of the exploration grid")
     bar = tqdm(total=params.max_experiments, disable=not progress, leave=False, desc="GPR")
     for x in grid[: params.max_experiments]:
         _record(rows, x, _run(experiment, x, rng), "explore", np.nan, params, experiment)
@@ -313,6 +324,7 @@ def learn_parameters(experiment, params: GPRParams = GPRParams(),
             centres.append(U_run[answer])
         cand_U = _candidates(params, rng, grid_U, U_run, centres)
         prob = feasibility_probability(gp, cand_U, params.Cp_th)
+        prob[~np.asarray(allowed(_from_unit(cand_U, params)), dtype=bool)] = -1.0  # never chosen
         ok = np.flatnonzero(prob >= params.P_th)
         if ok.size:
             J = objective(_from_unit(cand_U[ok], params), params)

@@ -75,6 +75,31 @@ def lissajous_offset(t, params: LissajousParams = LissajousParams()) -> np.ndarr
     return force / np.array([params.kappa_x, params.kappa_y])
 
 
+def excursion(params: LissajousParams) -> float:
+    """Largest quasi-static deviation of the tool from its nominal path under the oscillation,
+    m: ``hypot(A_x / kappa_x, A_y / kappa_y)``, the corner of the Lissajous figure."""
+    check_instance("params", params, LissajousParams)
+    return float(np.hypot(params.A_x / params.kappa_x, params.A_y / params.kappa_y))
+
+
+def vector_excursions(X) -> np.ndarray:
+    """:func:`excursion` of operation vectors ``X`` (n, 5) ``(v, f_n, kappa, f_x, A_x)`` with
+    ``A_y = A_x`` and ``kappa_y = kappa_x`` (Kabir Sec. VIII), (n,) m."""
+    X = check_points("X", X, 5)
+    return np.sqrt(2.0) * X[:, 4] / X[:, 2]
+
+
+def check_excursion(params: LissajousParams, cap: float) -> None:
+    """Refuse an oscillation whose :func:`excursion` exceeds the path-deviation ``cap`` (m,
+    one pad width in the cell): ValueError naming ``lissajous``. Such parameters are refused
+    where they are chosen (the learner's feasibility rule), never clipped in the controller."""
+    x = excursion(params)
+    if x > check_positive("cap", cap):
+        raise ValueError(f"lissajous: A_x = {params.A_x:g} N, A_y = {params.A_y:g} N at kappa = {params.kappa_x:g}, "
+                         f"{params.kappa_y:g} N/m swing the pad {1e3 * x:.1f} mm off its path, above the "
+                         f"path-deviation cap of one pad width ({1e3 * cap:.1f} mm)")
+
+
 def _frames_from_normals(path: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """Tool rotations (n,3,3): z = -normal, x = direction of travel projected off z."""
     z = -normals / np.linalg.norm(normals, axis=1, keepdims=True)

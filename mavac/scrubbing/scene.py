@@ -2,7 +2,9 @@
 
 * :func:`open_cell` loads both iiwa arms (the same URDFs as their pinocchio models) into a
   :class:`mavac.sim.world.SimWorld`, the part as a carried body (convex-hull collision, mass
-  ``part_mass``) welded to the holding flange (the grasp);
+  ``part_mass``) welded to the holding flange (the grasp); while a setup is scrubbed,
+  :func:`fix_part` puts the part's exact concave mesh where the held part is, as a static body
+  the pad meets (:func:`release_part` removes it);
 * :func:`move_holder` plans a collision-free joint motion of the holding arm with the part
   (OMPL RRT-Connect, coal checks) and tracks it in torque mode (pinocchio computed torques
   with the part's inertia); its simulated duration is the setup time;
@@ -54,6 +56,15 @@ class TwoArmCell:
     log: dict = field(default_factory=dict)
     #: the holding arm's setup-motion checker (:func:`setup_motion_checker`), built on first use
     setup_checker: CollisionChecker | None = None
+    #: the floor's body id
+    floor: int = -1
+    #: the part's exact concave mesh as a static body while it is scrubbed (:func:`fix_part`)
+    fixed_part: int | None = None
+
+    @property
+    def scrubbed(self) -> int:
+        """The body the pad scrubs: the static concave copy while fixed, else the held part."""
+        return self.part if self.fixed_part is None else self.fixed_part
 
 
 def holder_dynamics_model(holder_model, params: BimanualCellParams) -> pin.Model:
@@ -87,7 +98,7 @@ def open_cell(world: SimWorld, cleaner_model, holder_model, part_mesh: trimesh.T
     """
     check_instance("params", params, BimanualCellParams)
     check_mesh("part_mesh", part_mesh)
-    world.add_floor()
+    floor = world.add_floor()
     names = [n for n in cleaner_model.model.names[1:]]
     cleaner = world.add_robot(cleaner_model.urdf_path, world_T_base=params.world_T_cleaner, joint_names=names)
     holder = world.add_robot(holder_model.urdf_path, world_T_base=params.world_T_holder, joint_names=names)
@@ -106,12 +117,39 @@ def open_cell(world: SimWorld, cleaner_model, holder_model, part_mesh: trimesh.T
     cleaner.brake(CLEANER_PARK, params.brake_torque)
     holder.brake(q_holder, params.brake_torque)
     return TwoArmCell(world, cleaner, holder, cleaner_model, holder_model, holder_dynamics_model(holder_model, params),
-                      part, part_mesh, params, pad, float(np.pi * (pad_width / 2) ** 2))
+                      part, part_mesh, params, pad, float(np.pi * (pad_width / 2) ** 2), floor=floor)
 
 
 def world_T_part(cell: TwoArmCell) -> np.ndarray:
     """(4, 4) pose of the part in the simulation (its base frame is the part frame)."""
-    return cell.world.body_pose(cell.part)
+    return cell.world.body_pose(cell.scrubbed)
+
+
+def fix_part(cell: TwoArmCell) -> int:
+    """The part as the pad meets it: its exact concave mesh, a static body at the held part's
+    pose (pybullet collides a movable mesh as its convex hull, which lets the pad ride over
+    concave regions). The cleaning arm then touches only this copy; the held copy keeps the
+    grasp. Undone by :func:`release_part`. Returns the static body's id."""
+    if cell.fixed_part is not None:
+        return cell.fixed_part
+    world, mesh = cell.world, cell.part_mesh
+    body = world.add_static_mesh(mesh.vertices, mesh.faces, world_T_mesh=world.body_pose(cell.part),
+                                 rgba=(0.85, 0.85, 0.8, 1))
+    world.ignore_contacts(cell.holder.body, body)
+    world.ignore_contacts(body, cell.part)
+    world.ignore_contacts(cell.cleaner.body, cell.part)
+    world.set_contact(body, friction=cell.params.friction)
+    cell.fixed_part = body
+    return body
+
+
+def release_part(cell: TwoArmCell) -> None:
+    """Remove :func:`fix_part`'s static copy; the cleaning arm collides with the held part again."""
+    if cell.fixed_part is None:
+        return
+    cell.world.remove_body(cell.fixed_part)
+    cell.world.ignore_contacts(cell.cleaner.body, cell.part, collide=True)
+    cell.fixed_part = None
 
 
 # ---------------------------------------------------------------- holding arm motion

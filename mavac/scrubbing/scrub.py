@@ -1,17 +1,20 @@
 """Scrubbing one setup in the two-arm cell (Kabir et al. Sec. VI-VIII, IX-C), SIMULATED.
 
 * :func:`schedule_for_pass` turns a pass of the tool path into a time-sampled
-  :class:`Schedule`: the contact segments with the Lissajous overlay, the repositioning moves
-  in free motion;
+  :class:`Schedule`: a landing from the approach point (or the repositioning move from the
+  previous pass), the contact segments with the Lissajous overlay ramped in, the repositioning
+  moves in free motion; an oscillation wider than the pad is refused;
 * :func:`run_schedule` makes the cleaning arm follow it in torque mode: Cartesian impedance
   with stiffness kappa in the tool plane, explicit force control (f_n plus an integral of the
-  measured force error) along tool z, the Lissajous force as feed-forward, pinocchio gravity
-  compensation (:class:`Gains`, from :class:`mavac.params.BimanualCellParams`). It logs the
-  measured pad/part contact force and accumulates, per stain face, the Preston removal
-  ``preston x pressure x sliding`` where the pad touches (pressure = measured normal force /
+  measured force error, integrated only while the pad is on the part and restarted from 0 when
+  it leaves) along tool z, the Lissajous force as feed-forward, pinocchio gravity compensation
+  (:class:`Gains`, from :class:`mavac.params.BimanualCellParams`). It logs every contact of
+  both arms at every step (:meth:`ScrubLog.row`) and accumulates, per stain face under the
+  pad, the Preston removal ``preston x pressure x sliding`` (pressure = measured normal force /
   pad area, sliding = measured relative pad/part velocity x dt);
-* :func:`execute_setup` moves the part to a setup, scrubs every pass of its tool path and
-  looks after each (:mod:`mavac.scrubbing.residue`).
+* :func:`execute_setup` moves the part to a setup, fixes it as its exact mesh
+  (:func:`mavac.scrubbing.scene.fix_part`), scrubs every pass of its tool path and looks after
+  each (:mod:`mavac.scrubbing.residue`).
 """
 
 from __future__ import annotations
@@ -30,9 +33,9 @@ from ..sim.control import gravity_torques
 from ..sim.world import transforms_from_poses
 from ..validate import check_array, check_instance
 from .cell import CLEANER_PARK
-from .lissajous import overlay_path
+from .lissajous import check_excursion, overlay_path
 from .residue import StainState, perceive
-from .scene import LOG_EVERY, TwoArmCell, move_cleaner, move_holder, world_T_part
+from .scene import LOG_EVERY, TwoArmCell, fix_part, move_cleaner, move_holder, release_part, world_T_part
 from .toolpath import PassPath, reachable_from_robot, toolpath_for_setup
 from .wear import ContactWear
 
@@ -75,22 +78,35 @@ class Schedule:
 
 @dataclass
 class ScrubLog:
-    """What the simulation measured while a schedule ran (SIMULATED).
+    """What the simulation measured while a schedule ran, one entry per physics step (SIMULATED).
 
     Attributes
     ----------
     t : (m,) float, s
     normal_force : (m,) float, N
-        Measured pad/part contact normal force.
+        Measured pad/part contact normal force (0 off the part).
     in_contact : (m,) bool
         The pad touched the part.
     commanded_contact : (m,) bool
+    commanded_force : (m,) float, N
+        Commanded normal force f_n (0 while repositioning).
+    saturated : (m,) bool
+        The force integral sat at its clip.
+    other : (m, 3) float, N
+        Summed normal force of the contacts no plan allows: a cleaning-arm link other than the
+        pad against the part, an arm against the other arm, an arm against the floor.
+    other_count : (m, 3) int
+        Their contact points.
+    deviation : (m,) float, m
+        Distance of the pad face from the nominal path in the tool plane.
     pad_positions : (m, 3) float
         Measured pad-face positions (world).
     removal : (F,) float
         Preston removal accumulated per face of the part (stain layers at unit hardness).
     sliding_m : float
         Total measured pad/part sliding distance in contact, m.
+    wear_depth_m : float
+        Deepest a face credited with wear lay below the surface under the pad, m.
     q_samples : (k, 7) float
         Cleaning arm configuration every :data:`REPLAY_EVERY` steps (for replays).
     """
@@ -99,22 +115,68 @@ class ScrubLog:
     normal_force: np.ndarray
     in_contact: np.ndarray
     commanded_contact: np.ndarray
+    commanded_force: np.ndarray
+    saturated: np.ndarray
+    other: np.ndarray
+    other_count: np.ndarray
+    deviation: np.ndarray
     pad_positions: np.ndarray
     removal: np.ndarray
     sliding_m: float
+    wear_depth_m: float
     q_samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 7)))
 
     @property
     def contact_s(self) -> float:
-        """Time with the pad touching the part, s."""
+        """Time with the pad touching the part while contact was commanded, s."""
         dt = float(self.t[1] - self.t[0]) if len(self.t) > 1 else 0.0
-        return float(self.in_contact.sum()) * dt
+        return float((self.in_contact & self.commanded_contact).sum()) * dt
 
     @property
     def mean_contact_force(self) -> float:
-        """Mean measured normal force over the steps in contact, N (nan without contact)."""
+        """Mean measured normal force over the commanded steps in contact, N (nan without contact)."""
         sel = self.in_contact & self.commanded_contact
         return float(self.normal_force[sel].mean()) if sel.any() else float("nan")
+
+    def row(self) -> dict:
+        """Every contact measure of the pass (the columns of ``kabir_execution.csv``).
+
+        Force errors are relative to the mean commanded f_n: over ALL commanded steps (0 N
+        counted while the pad is off the part) and over the steps in contact; ``failed`` marks a
+        pass with any contact that is not the pad's.
+        """
+        cmd, touch = self.commanded_contact, self.in_contact
+        on = cmd & touch
+        f_n = float(self.commanded_force[cmd].mean())
+        f_all = np.where(touch, self.normal_force, 0.0)[cmd]
+        f_on = self.normal_force[on]
+        steps = (self.other_count > 0).sum(axis=0)
+        peak = self.other.max(axis=0, initial=0.0)
+        return dict(commanded_steps=int(cmd.sum()), contact_steps=int(on.sum()), duty=float(on.sum() / cmd.sum()),
+                    contact_s=self.contact_s, f_n_n=f_n, mean_force_all_n=float(f_all.mean()),
+                    force_error_all=_force_error(f_all, self.commanded_force[cmd], f_n)[0],
+                    force_rms_all=_force_error(f_all, self.commanded_force[cmd], f_n)[1],
+                    mean_normal_force_n=self.mean_contact_force,
+                    force_error_contact=_force_error(f_on, self.commanded_force[on], f_n)[0],
+                    force_rms_contact=_force_error(f_on, self.commanded_force[on], f_n)[1],
+                    integral_saturated_steps=int(self.saturated[cmd].sum()),
+                    integral_saturated_share=float(self.saturated[cmd].mean()),
+                    nonpad_part_steps=int(steps[0]), nonpad_part_peak_n=float(peak[0]),
+                    arm_arm_steps=int(steps[1]), arm_arm_peak_n=float(peak[1]),
+                    arm_floor_steps=int(steps[2]), arm_floor_peak_n=float(peak[2]),
+                    pad_touch_outside_steps=int((touch & ~cmd).sum()), failed=bool(steps.sum() > 0),
+                    max_deviation_mm=1e3 * float(self.deviation[cmd].max()),
+                    wear_depth_max_mm=1e3 * self.wear_depth_m if np.isfinite(self.wear_depth_m) else np.nan,
+                    sliding_m=self.sliding_m)
+
+
+def _force_error(measured, commanded, f_n) -> tuple[float, float]:
+    """``(mean error, RMS error)`` of measured against commanded forces, both over ``f_n``
+    (NaN for no steps)."""
+    if measured.size == 0:
+        return float("nan"), float("nan")
+    e = measured - commanded
+    return float(e.mean() / f_n), float(np.sqrt(np.mean(e**2)) / f_n)
 
 
 def check_force_limits(cleaner_model, q, rotation, force_max, *, name: str = "force") -> None:
@@ -134,7 +196,8 @@ def check_force_limits(cleaner_model, q, rotation, force_max, *, name: str = "fo
 
 
 def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> ScrubLog:
-    """The cleaning arm follows ``schedule`` in torque mode (see the module docstring).
+    """The cleaning arm follows ``schedule`` in torque mode (see the module docstring), every
+    contact of the arms logged.
 
     Parameters
     ----------
@@ -154,12 +217,11 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
     fid = robot.getFrameId(cell.cleaner_model.tool_frame)
     dt = cell.world.time_step
     gains = Gains.of(cell.params, stiffness)
-    wear = ContactWear(cell.part_mesh, np.sqrt(cell.pad_area / np.pi), cell.params.preston)
     cell.holder.brake(cell.holder.q(), cell.params.brake_torque)
     c.enable_torque_control()
     m = len(schedule.positions)
-    force, touch, pads = np.zeros(m), np.zeros(m, dtype=bool), np.zeros((m, 3))
-    state = {"integral": 0.0, "sliding": 0.0}
+    log = _StepLog(m)
+    state = {"integral": 0.0, "sliding": 0.0, "touch": False, "saturated": False}
     kept, contacts = [], []
     for i in range(m):
         q, dq = c.state()
@@ -169,17 +231,53 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
         pin.updateFramePlacements(robot, data)
         J = pin.getFrameJacobian(robot, data, fid, pin.LOCAL_WORLD_ALIGNED)
         T = data.oMf[fid]
-        tau = _scrub_torques(robot, q, dq, J, T, schedule, i, gains, state, force[i - 1] if i else 0.0, dt)
+        tau = _scrub_torques(robot, q, dq, J, T, schedule, i, gains, state, log.force[i - 1] if i else 0.0, dt)
         # gravity last, as the law's sum always had it; one pinocchio data for the whole loop
         c.apply_torques_unchecked(tau + np.array(pin.computeGeneralizedGravity(robot, gravity_data, q)))
         cell.world.step_once()
-        summary = cell.world.contact_forces(c.body, cell.part, link_a=cell.pad_link)
-        force[i], touch[i], pads[i] = summary.normal_force, summary.count > 0, T.translation
-        if touch[i]:
-            contacts.append(_contact_step(cell, summary, J @ dq, state, dt))
+        pad = log.record(i, cell, state["saturated"], T.translation, schedule)
+        state["touch"] = pad is not None
+        if pad is not None:
+            contacts.append(_contact_step(cell, pad, J @ dq, schedule.rotations[i][:, 2], state, dt))
+    wear = ContactWear(cell.part_mesh, np.sqrt(cell.pad_area / np.pi), cell.params.preston,
+                       depth=cell.params.wear_depth)
     _add_wear(wear, contacts)
-    return ScrubLog(np.arange(1, m + 1) * dt, force, touch, np.asarray(schedule.contact, bool), pads,
-                    wear.removal, state["sliding"], np.array(kept))
+    return ScrubLog(np.arange(1, m + 1) * dt, log.force, log.touch, np.asarray(schedule.contact, bool),
+                    np.where(schedule.contact, schedule.forces[:, 2], 0.0), log.saturated, log.other,
+                    log.other_count, log.deviation, log.pads, wear.removal, state["sliding"], wear.deepest,
+                    np.array(kept))
+
+
+class _StepLog:
+    """Per-step arrays of :func:`run_schedule`, filled by :meth:`record`."""
+
+    def __init__(self, m: int):
+        self.force, self.touch, self.saturated = np.zeros(m), np.zeros(m, dtype=bool), np.zeros(m, dtype=bool)
+        self.other, self.other_count = np.zeros((m, 3)), np.zeros((m, 3), dtype=int)
+        self.deviation, self.pads = np.zeros(m), np.zeros((m, 3))
+
+    def record(self, i: int, cell: TwoArmCell, saturated: bool, pad_position, schedule: Schedule):
+        """Classify every contact of both arms at step ``i``; returns the pad/part contact
+        ``(normal force (N), points on the part (k, 3), normals (k, 3))`` or None."""
+        world = cell.world
+        mine = world.contacts_of(cell.cleaner.body)
+        theirs = world.contacts_of(cell.holder.body)
+        parts = np.isin(mine.body_b, (cell.part, cell.scrubbed))
+        pad = parts & (mine.link_a == cell.pad_link)
+        masks = ((mine, parts & ~pad), (mine, mine.body_b == cell.holder.body),
+                 (mine, mine.body_b == cell.floor))
+        for k, (table, sel) in enumerate(masks):
+            self.other[i, k], self.other_count[i, k] = table.normal_force[sel].sum(), int(sel.sum())
+        on_floor = theirs.body_b == cell.floor
+        self.other[i, 2] += theirs.normal_force[on_floor].sum()
+        self.other_count[i, 2] += int(on_floor.sum())
+        R = schedule.rotations[i]
+        self.deviation[i] = float(np.linalg.norm((R.T @ (pad_position - schedule.positions[i]))[:2]))
+        self.pads[i], self.saturated[i] = pad_position, saturated
+        if not pad.any():
+            return None
+        self.force[i], self.touch[i] = mine.normal_force[pad].sum(), True
+        return self.force[i], mine.positions_b[pad], mine.normals[pad]
 
 
 class Gains(NamedTuple):
@@ -226,12 +324,16 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
     v = J @ dq
     v_t = R.T @ v[:3]
     f_cmd = schedule.forces[i]
+    state["saturated"] = False
+    if schedule.contact[i] and state["touch"]:  # conditional integration: only on the part
+        raw = state["integral"] + g.ki * (f_cmd[2] - f_measured) * dt
+        state["integral"] = float(np.clip(raw, -g.windup * f_cmd[2], g.windup * f_cmd[2]))
+        state["saturated"] = state["integral"] != raw
+    else:  # off the part or repositioning: the integral restarts from 0
+        state["integral"] = 0.0
     if schedule.contact[i]:
-        state["integral"] = float(np.clip(state["integral"] + g.ki * (f_cmd[2] - f_measured) * dt,
-                                          -g.windup * f_cmd[2], g.windup * f_cmd[2]))
         fz = f_cmd[2] + state["integral"] - g.d * v_t[2]
     else:
-        state["integral"] = 0.0
         fz = g.k * e_t[2] - g.d * v_t[2]
     F_t = np.array([g.k * e_t[0] - g.d * v_t[0] + f_cmd[0], g.k * e_t[1] - g.d * v_t[1] + f_cmd[1], fz])
     moment = g.kr * pin.log3(R @ T.rotation.T) - g.dr * v[3:]
@@ -245,29 +347,31 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
     return J.T @ wrench + tau_null
 
 
-def _contact_step(cell, summary, pad_twist, state, dt) -> tuple:
-    """This step's measured contact: adds its sliding (m) to ``state``; returns what the wear
-    needs, ``(part position (3,), part xyzw quaternion (4,), contact centroid (3,), pressure
-    (Pa), sliding (m))``, applied for all steps at once by :func:`_add_wear`."""
-    lin, ang = cell.world.body_velocity(cell.part)
-    position, quaternion = cell.world.body_position(cell.part)
-    centre = summary.positions.mean(axis=0)
+def _contact_step(cell, pad, pad_twist, axis, state, dt) -> tuple:
+    """This step's measured pad contact ``pad`` (:meth:`_StepLog.record`): adds its sliding (m)
+    to ``state``; returns what the wear needs, ``(part position (3,), part xyzw quaternion (4,),
+    contact centroid on the part (3,), pad axis (3,), pressure (Pa), sliding (m))``, applied for
+    all steps at once by :func:`_add_wear`."""
+    force, points, normals = pad
+    lin, ang = cell.world.body_velocity(cell.scrubbed)
+    position, quaternion = cell.world.body_position(cell.scrubbed)
+    centre = points.mean(axis=0)
     v_part = lin + np.cross(ang, centre - position)
     v_rel = pad_twist[:3] - v_part
-    n = summary.normals.mean(axis=0)
+    n = normals.mean(axis=0)
     n = n / max(np.linalg.norm(n), 1e-12)
     sliding = float(np.linalg.norm(v_rel - (v_rel @ n) * n)) * dt
     state["sliding"] += sliding
-    return position, quaternion, centre, summary.normal_force / cell.pad_area, sliding
+    return position, quaternion, centre, axis, force / cell.pad_area, sliding
 
 
 def _add_wear(wear: ContactWear, contacts: list) -> None:
     """Preston removal of the faces under the pad for every contact step (:func:`_contact_step`)."""
     if not contacts:
         return
-    position, quaternion, centre, pressure, sliding = (np.array(c) for c in zip(*contacts))
+    position, quaternion, centre, axis, pressure, sliding = (np.array(c) for c in zip(*contacts))
     world_T_part = transforms_from_poses(position, quaternion)
-    wear.add_steps(np.linalg.inv(world_T_part), centre, pressure, sliding)
+    wear.add_steps(np.linalg.inv(world_T_part), centre, axis, pressure, sliding)
 
 
 # ---------------------------------------------------------------- schedules
@@ -284,24 +388,37 @@ def _free_move(points, R0, R1, speed, dt):
     return pos, rot
 
 
-def schedule_for_pass(pp: PassPath, lissajous: LissajousParams, toolpath: ToolpathParams, dt: float) -> Schedule:
+def schedule_for_pass(pp: PassPath, lissajous: LissajousParams, toolpath: ToolpathParams, dt: float, *,
+                      ramp_periods: float = BimanualCellParams.lissajous_ramp_periods) -> Schedule:
     """One pass as a time-sampled schedule: each contact segment with the Lissajous overlay
-    (tool frame forces), each repositioning move (lift, move, lower) in free motion.
+    (tool frame forces, ramped in over ``ramp_periods`` periods of its y axis), each
+    repositioning move (lift, move, lower) in free motion; a pass without a move into its
+    first segment lands on it from its approach point, ``toolpath.lift_height_m`` above it
+    along the pad axis.
 
-    Raises ``ValueError`` naming ``toolpath`` when the pass has no contact segment.
+    Raises ``ValueError`` naming ``toolpath`` when the pass has no contact segment, naming
+    ``lissajous`` when the oscillation would swing the pad more than one pad width
+    (``toolpath.tool_width_m``) off its path (:func:`mavac.scrubbing.lissajous.check_excursion`).
     """
     if not pp.segments:
         raise ValueError(f"toolpath: pass {pp.pass_number} has no contact segment (nothing reachable to clean)")
+    check_excursion(lissajous, toolpath.tool_width_m)
     overlays = [overlay_path(seg, nrm, lissajous, dt=dt) for seg, nrm in zip(pp.segments, pp.normals)]
     entry = len(pp.repositions) == len(pp.segments)  # the first move comes from the previous pass
+    ramp_s = ramp_periods / lissajous.f_y
     parts = []
     for i, ov in enumerate(overlays):
+        R1 = ov.rotations[0]
         j = i if entry else i - 1
-        if j >= 0:
-            R0 = overlays[i - 1].rotations[-1] if i > 0 else ov.rotations[0]
-            pos, rot = _free_move(pp.repositions[j], R0, ov.rotations[0], toolpath.reposition_speed_m_s, dt)
+        if j >= 0 or i == 0:
+            R0 = overlays[i - 1].rotations[-1] if i > 0 else R1
+            move = pp.repositions[j] if j >= 0 else np.array([ov.nominal[0] - toolpath.lift_height_m * R1[:, 2],
+                                                               ov.nominal[0]])
+            pos, rot = _free_move(move, R0, R1, toolpath.reposition_speed_m_s, dt)
             parts.append((pos, rot, np.zeros((len(pos), 3)), np.zeros(len(pos), dtype=bool)))
         f_tool = np.einsum("nji,nj->ni", ov.rotations, ov.forces)
+        if ramp_s > 0:
+            f_tool[:, :2] *= np.clip(ov.t / ramp_s, 0.0, 1.0)[:, None]
         parts.append((ov.nominal, ov.rotations, f_tool, np.ones(len(ov.t), dtype=bool)))
     return Schedule(*(np.concatenate([p[k] for p in parts]) for k in range(4)))
 
@@ -369,6 +486,7 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
     """
     out.setup_times.append(move_holder(cell, q_holder, seed=seed))
     _keep(out, cell, "holder")
+    fix_part(cell)
     T = world_T_part(cell)
     tp = toolpath_for_setup(part, T, np.asarray(patches), toolpath, reachable=reachable_from_robot(cell.cleaner_model))
     if snapshot is not None:
@@ -377,7 +495,8 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
     for pp in tp.passes:
         if not pp.segments:
             continue
-        sched = schedule_for_pass(pp, lissajous, toolpath, cell.world.time_step)
+        sched = schedule_for_pass(pp, lissajous, toolpath, cell.world.time_step,
+                                  ramp_periods=cell.params.lissajous_ramp_periods)
         if first:
             approach(cell, sched, toolpath.lift_height_m, lissajous)
             _keep(out, cell, "cleaner")
@@ -391,15 +510,14 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
         state.images.append(seen)
         out.forces.append(log.normal_force[log.in_contact & log.commanded_contact])
         out.paths.append((T, np.vstack(pp.segments)))
-        out.rows.append(dict(setup=label, pass_=pp.pass_number, path_length_m=pp.path_length_m,
-                             contact_s=log.contact_s, mean_normal_force_n=log.mean_contact_force,
-                             f_n_n=lissajous.f_n, sliding_m=log.sliding_m,
+        out.rows.append(dict(setup=label, pass_=pp.pass_number, path_length_m=pp.path_length_m, **log.row(),
                              residue_fraction=seen["residue_fraction"], C_p=seen["C_p"]))
         out.stain_images.append(seen["image"])
         if snapshot is not None:
             out.snapshots.append((f"{label} after pass {pp.pass_number}", snapshot(cell, state)))
     move_cleaner(cell, CLEANER_PARK)
     _keep(out, cell, "cleaner")
+    release_part(cell)
 
 
 def _keep(out: Execution, cell: TwoArmCell, arm: str) -> None:

@@ -312,8 +312,10 @@ class ScrubExperiment:
 
 
 class ContactWear:
-    """Per-face Preston removal from MEASURED contact, accumulated step by step: the faces
-    within ``pad_radius`` m of the contact centroid lose ``preston x pressure x sliding``.
+    """Per-face Preston removal from MEASURED contact, accumulated step by step: the faces under
+    the pad lose ``preston x pressure x sliding``. Under the pad: within ``pad_radius`` m of
+    the pad axis through the contact centroid, within ``depth`` m along that axis of the
+    centroid (the real surface, where the pad meets the part's exact mesh), and facing the pad.
 
     Parameters
     ----------
@@ -322,23 +324,32 @@ class ContactWear:
     pad_radius : float, m
     preston : float
         Stain layers per (Pa x m of sliding).
+    depth : float, m
+        Farthest a credited face may lie from the surface under the pad, along the pad axis.
 
     Attributes
     ----------
     removal : (F,) float
         Removal so far per face (stain layers at unit hardness).
+    deepest : float, m
+        Deepest a credited face lay below the contact centroid along the pad axis (-inf before
+        any wear).
     """
 
-    def __init__(self, part_mesh: trimesh.Trimesh, pad_radius: float, preston: float):
+    def __init__(self, part_mesh: trimesh.Trimesh, pad_radius: float, preston: float, *, depth: float):
         from scipy.spatial import cKDTree
 
-        self.centres = np.asarray(check_mesh("part_mesh", part_mesh).triangles_center)
+        mesh = check_mesh("part_mesh", part_mesh)
+        self.centres = np.asarray(mesh.triangles_center)
+        self.normals = np.asarray(mesh.face_normals)
         self.tree = cKDTree(self.centres)
         self.radius = float(check_positive("pad_radius", pad_radius))
         self.preston = float(check_positive("preston", preston))
+        self.depth = float(check_positive("depth", depth))
         self.removal = np.zeros(len(self.centres))
+        self.deepest = -np.inf
 
-    def add_steps(self, part_T_world, centres, pressure, sliding) -> None:
+    def add_steps(self, part_T_world, centres, axes, pressure, sliding) -> None:
         """Steps of contact, in order, at once.
 
         Parameters
@@ -346,7 +357,9 @@ class ContactWear:
         part_T_world : (n, 4, 4) float
             Pose of the world in the part frame at each step.
         centres : (n, 3) float, m
-            Contact centroid of each step, world frame.
+            Contact centroid on the part at each step, world frame.
+        axes : (n, 3) float
+            Pad axis (tool z, into the surface) at each step, world frame.
         pressure : (n,) float, Pa
         sliding : (n,) float, m
 
@@ -354,8 +367,19 @@ class ContactWear:
         order (``numpy.add.at``).
         """
         c = transform_each_point(part_T_world, centres)
-        faces = self.tree.query_ball_point(c, self.radius) if len(c) else []
+        if len(c) == 0:
+            return
+        a = np.einsum("nij,nj->ni", np.asarray(part_T_world)[:, :3, :3], np.asarray(axes, dtype=float))
+        faces = self.tree.query_ball_point(c, float(np.hypot(self.radius, self.depth)))
         counts = np.array([len(f) for f in faces], dtype=np.intp)
         index = np.fromiter(itertools.chain.from_iterable(faces), dtype=np.intp, count=int(counts.sum()))
-        step = self.preston * np.asarray(pressure, dtype=float) * np.asarray(sliding, dtype=float)
-        np.add.at(self.removal, index, np.repeat(step, counts))
+        step = np.repeat(np.arange(len(c)), counts)
+        rel = self.centres[index] - c[step]
+        along = np.einsum("ij,ij->i", rel, a[step])
+        across = np.linalg.norm(rel - along[:, None] * a[step], axis=1)
+        facing = np.einsum("ij,ij->i", self.normals[index], a[step]) < 0
+        under = (np.abs(along) <= self.depth) & (across <= self.radius) & facing
+        if under.any():
+            self.deepest = max(self.deepest, float(along[under].max()))
+        amount = self.preston * np.asarray(pressure, dtype=float) * np.asarray(sliding, dtype=float)
+        np.add.at(self.removal, index[under], amount[step[under]])

@@ -17,6 +17,7 @@ import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import trimesh
@@ -47,6 +48,29 @@ class ContactSummary:
     normal_force: float
     count: int
     positions: np.ndarray
+    normals: np.ndarray
+
+
+class ContactTable(NamedTuple):
+    """Every contact point of one body at the last simulation step (:meth:`SimWorld.contacts_of`).
+
+    Attributes
+    ----------
+    body_b, link_a, link_b : (k,) int
+        The other body, this body's link (-1: base) and the other body's link.
+    normal_force : (k,) float, N
+    positions_a, positions_b : (k, 3) float, m
+        Contact points on this body and on the other (world).
+    normals : (k, 3) float
+        Contact normals, from the other body towards this one.
+    """
+
+    body_b: np.ndarray
+    link_a: np.ndarray
+    link_b: np.ndarray
+    normal_force: np.ndarray
+    positions_a: np.ndarray
+    positions_b: np.ndarray
     normals: np.ndarray
 
 
@@ -284,6 +308,18 @@ class SimWorld:
         return ContactSummary(float(forces.sum()), len(points), np.array([c[5] for c in points], dtype=float),
                               np.array([c[7] for c in points], dtype=float))
 
+    def contacts_of(self, body_a: int) -> ContactTable:
+        """Every contact point of ``body_a`` with any body at the last step, unchecked (control
+        loops: one pybullet query gives what a loop classifies by body and link)."""
+        points = self._p.getContactPoints(bodyA=body_a, physicsClientId=self.client) or ()
+        if not points:
+            z = np.zeros(0, dtype=int)
+            return ContactTable(z, z, z, np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
+        cols = list(zip(*points))
+        return ContactTable(np.array(cols[2], dtype=int), np.array(cols[3], dtype=int), np.array(cols[4], dtype=int),
+                            np.array(cols[9], dtype=float), np.array(cols[5], dtype=float),
+                            np.array(cols[6], dtype=float), np.array(cols[7], dtype=float))
+
     def normal_force(self, body_a: int, body_b: int) -> float:
         """:attr:`ContactSummary.normal_force` of :meth:`contact_forces` (N), without the
         summary's arrays and the checks (control loops)."""
@@ -321,13 +357,13 @@ class SimWorld:
         return p.createConstraint(int(parent), int(parent_link), int(child), -1, p.JOINT_FIXED, [0, 0, 0],
                                   offset.tolist(), [0, 0, 0], physicsClientId=self.client)
 
-    def ignore_contacts(self, body_a: int, body_b: int) -> None:
+    def ignore_contacts(self, body_a: int, body_b: int, *, collide: bool = False) -> None:
         """No contact between any link of ``body_a`` and the base of ``body_b`` (a held body
-        touches its gripper by construction)."""
+        touches its gripper by construction); ``collide=True`` restores their contacts."""
         self._check_open()
         p, c = self._p, self.client
         for link in range(-1, p.getNumJoints(int(body_a), physicsClientId=c)):
-            p.setCollisionFilterPair(int(body_a), int(body_b), link, -1, 0, physicsClientId=c)
+            p.setCollisionFilterPair(int(body_a), int(body_b), link, -1, int(bool(collide)), physicsClientId=c)
 
     def set_contact(self, body: int, link: int = -1, *, friction: float, stiffness: float | None = None,
                     damping: float | None = None) -> None:
