@@ -219,8 +219,9 @@ class SetupSpaceParams(CheckedFields):
     robot base frame (the Puma's shoulder: z0 up through joint 1, the shoulder axis at z = 0).
     The paper gives the range, not the placement (Kabir, Sec. IX-A), and says how the range was
     found: a coarse sweep over a wide range, eliminating the setups that reach no patch
-    (Sec. IV-A). :mod:`mavac.setups.space` does that per part; the reproduced tables use it.
-    The defaults below are a generic square for a part of about a metre.
+    (Sec. IV-A). The reproduced tables run that once over the four objects together and keep
+    one 1 m square for all (:func:`mavac.setups.space.narrowed_square`, "for all the cases in
+    Table II"). The defaults below are a generic square for a part of about a metre.
     """
 
     # Kabir, Sec. IX-A: "The narrowed down sampling region ... was [0, 1 m] x [0, 1 m] x [0, 2 pi]".
@@ -237,12 +238,17 @@ class SetupSpaceParams(CheckedFields):
     res_alpha: float = ranged(math.radians(10.0), gt=0.0)
     # Ours, a generic default kept from earlier versions: the square starts 0.30 m in front of
     # joint 1 and is centred on the robot sideways. The reproduced tables do not use it: they
-    # place each part's box by the paper's procedure (mavac.setups.space).
+    # place their square by the paper's procedure (mavac.setups.space.narrowed_square).
     origin_x: float = 0.30
     origin_y: float = -0.50
     # Ours: a work table 0.75 m high (a common table height; the paper gives none), with the
     # Puma's shoulder axis 0.672 m above the floor: the table top is 0.078 m above the shoulder.
     table_z: float = 0.75 - 0.672
+    # Ours: a placement whose footprint comes within the robot's pedestal radius plus this
+    # clearance of joint 1's axis is refused before the reach test (the part cannot stand where
+    # the robot's column is; 0.05 m leaves room for the table's edge around the column). None
+    # turns the test off. Applies to robots with a "pedestal" geometry (the Puma 560).
+    pedestal_margin: float | None = ranged(0.05, ge=0.0)
 
     def __post_init__(self):
         super().__post_init__()

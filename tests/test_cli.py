@@ -454,3 +454,20 @@ def test_clean_interrupted_exits_130_and_leaves_no_file(cleaned, tmp_path, capsy
                        capsys)
     assert code == 130 and "interrupted" in err and "Traceback" not in err
     assert not list(tmp_path.iterdir())
+
+
+def test_setups_refuses_patches_only_a_colliding_arm_reaches_and_says_how_many(tmp_path, capsys):
+    # a bottle with a 4.4 cm neck, 36 cm tall, stained on its inside floor (1 cm up)
+    profile = np.array([(0, 0), (0.08, 0), (0.08, 0.30), (0.03, 0.33), (0.03, 0.36), (0.022, 0.36),
+                        (0.022, 0.33), (0.072, 0.30), (0.072, 0.01), (0, 0.01)])
+    trimesh.creation.revolve(profile, sections=32).export(tmp_path / "vase.stl")
+    argv = ["setups", str(tmp_path / "vase.stl"), "--stain", "up:10,box:-0.07,-0.07,0.005,0.07,0.07,0.015", "--quiet"]
+    code, out, err = run(argv + ["--out", str(tmp_path / "on.html")], capsys)
+    plan = json.loads((tmp_path / "on.json").read_text())
+    assert code == cli.NO_PLAN and plan["status"] == "no_solution"
+    assert plan["collision_refused"] == len(plan["uncoverable"]) == 32
+    assert "collision check on: 32 stain patches refused" in out
+    code, out, err = run(argv + ["--no-collision", "--out", str(tmp_path / "off.html")], capsys)
+    plan = json.loads((tmp_path / "off.json").read_text())
+    assert code == 0 and plan["uncoverable"] == [] and plan["collision_refused"] == 0  # IK alone: through the neck
+    assert "collision check on" not in out

@@ -19,8 +19,9 @@ def robot():
 
 
 def small_stain(name="concave_bowl", step=40, far_patch=False):
-    """Every ``step``-th stain patch of a test object (optionally one patch 10 m away)."""
-    part = load_part(name)
+    """Every ``step``-th stain patch of a test object's one-region stain (optionally one patch
+    10 m away)."""
+    part = load_part(name, stain_blobs=(1, 1))
     v, n = part.patch_vertices[::step], part.patch_normals[::step]
     a, p = part.patch_areas[::step], part.passes[::step]
     if far_patch:

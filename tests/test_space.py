@@ -1,5 +1,6 @@
 """Setup space by the paper's procedure (Kabir Sec. IV-A): wide coarse sweep, drop the setups that
-reach nothing, box the rest; and the support plane of the reach test (issue 14)."""
+reach nothing, one 1 m square for all objects; no placement on the robot's pedestal; the
+collision option of the reach test on a deep cavity; the support plane of the reach test."""
 
 import dataclasses
 import math
@@ -15,7 +16,8 @@ from mavac.robots.models import puma560
 from mavac.setups.reach import PartReach, below_support, reach_bound, reach_targets, reach_targets_from_part
 from mavac.setups.sampling import uniform_setups
 from mavac.setups.setup_plan import plan_setups
-from mavac.setups.space import part_radius, reaching_box, wide_setup_space
+from mavac.setups.space import (PedestalClear, axis_distance, footprint, narrowed_square, part_radius, pedestal_radius,
+                                 wide_setup_space)
 
 ROBOT = puma560(tool_length=0.10)
 
@@ -31,18 +33,82 @@ def test_wide_space_is_wide_enough_to_contain_every_reaching_setup():
     assert not PartReach(ROBOT, reach_targets_from_part(part), wide)(far).any()
 
 
-def test_reaching_box_is_the_bounding_box_of_the_setups_that_reach_something():
+def test_narrowed_square_keeps_the_largest_share_of_every_objects_reaching_setups():
     wide = SetupSpaceParams(x_max=2.0, y_max=2.0, origin_x=0.0, origin_y=-1.0, res_x=0.5, res_y=0.5)
-    setups = uniform_setups(wide, (0.5, 0.5, math.pi))
-    cover = np.zeros((len(setups), 3), bool)
-    hit = (np.isclose(setups[:, 0], 0.5) & np.isclose(setups[:, 1], 1.5)) | \
-          (np.isclose(setups[:, 0], 1.5) & np.isclose(setups[:, 1], 0.5))
-    cover[hit, 1] = True
-    box = reaching_box(setups, cover, wide)
-    assert (box.origin_x, box.x_max, box.origin_y, box.y_max) == (0.5, 1.0, -0.5, 1.0)
-    assert box.x_min == 0.0 and box.y_min == 0.0 and box.res_x == SetupSpaceParams().res_x
-    with pytest.raises(ValueError, match="cover"):
-        reaching_box(setups, np.zeros_like(cover), wide)
+    # object a reaches around (1.5, 0.4), object b at (1.5, -0.4) and far at (0, -1)
+    a = np.array([[1.5, 0.4], [1.5, 0.4], [1.6, 0.3]])
+    b = np.array([[1.5, -0.4], [0.0, -1.0]])
+    space, scores = narrowed_square(wide, {"a": a, "b": b}, size=1.0, step=0.5)
+    assert (space.origin_x, space.origin_y, space.x_max, space.y_max) == (1.0, -0.5, 1.0, 1.0)
+    assert space.res_x == SetupSpaceParams().res_x and space.x_min == 0.0
+    best = scores[np.lexsort((scores[:, 1], scores[:, 0]))]
+    assert np.isclose(scores[:, 2].max(), 1.0 + 0.5)  # all of a, half of b
+    assert len(best) == 9  # corners 0, 0.5, 1 m on each axis of the 2 m region
+    with pytest.raises(ValueError, match="reaching"):
+        narrowed_square(wide, {"a": np.zeros((0, 2))})
+    with pytest.raises(ValueError, match="size"):
+        narrowed_square(wide, {"a": a}, size=3.0)
+
+
+def test_footprint_distance_to_the_robot_axis():
+    square = trimesh.creation.box(extents=[0.4, 0.2, 0.1])
+    hull = footprint(square.vertices)
+    space = dataclasses.replace(SetupSpaceParams(), origin_x=0.0, origin_y=0.0)
+    setups = np.array([[0.5, 0.0, 0.0], [0.5, 0.0, math.pi / 2], [0.05, 0.05, 0.3], [0.0, 0.5, 0.0]])
+    d = axis_distance(hull, setups, space)
+    assert np.allclose(d, [0.3, 0.4, 0.0, 0.4])
+    assert pedestal_radius(ROBOT) == pytest.approx(0.10)
+
+
+def test_no_placement_on_the_pedestal_reaches_anything():
+    from mavac.experiments import kabir_setups as K
+
+    part = load_part("concave_bowl")
+    # a square reaching over the robot: many placements would stand on its pedestal
+    space = SetupSpaceParams(x_max=2.0, y_max=2.0, origin_x=-1.0, origin_y=-1.0, res_x=0.25, res_y=0.25,
+                             res_alpha=math.radians(90))
+    b = K.baseline("concave_bowl", space, ReachParams(), n_jobs=1)
+    clear = PedestalClear(part.mesh.vertices, space, pedestal_radius(ROBOT), space.pedestal_margin)
+    on = ~clear(b.setups)
+    assert on.sum() == b.removed > 0
+    assert not b.cover[on].any()  # 0 placements inside the pedestal
+    assert b.cover[~on].any() and K.table2({"bowl": b}).n_rfc.iloc[0] == len(b.setups)
+    # the off-grid reach function refuses them too
+    inside = np.array([[1.0, 1.0, 0.0], [1.1, 0.9, 0.3]])
+    assert not clear(inside).any() and not b.reach(ReachParams())(inside).any()
+
+
+def test_paper_grid_has_15876_distinct_setups():
+    from mavac.setups.sampling import uniform_setups
+
+    assert len(uniform_setups(SetupSpaceParams())) == 21 * 21 * 36 == 15_876
+
+
+def _vase():
+    # a bottle: 16 cm body, 5 cm neck 6 cm long, walls 8 mm, floor 10 mm; stained inside floor
+    profile = np.array([(0, 0), (0.08, 0), (0.08, 0.30), (0.03, 0.33), (0.03, 0.36), (0.022, 0.36),
+                        (0.022, 0.33), (0.072, 0.30), (0.072, 0.01), (0, 0.01)])
+    mesh = trimesh.creation.revolve(profile, sections=32)
+    floor = np.flatnonzero(np.abs(mesh.triangles_center[:, 2] - 0.01) < 1e-6)
+    return part_from_mesh(mesh, floor, np.ones(len(floor), int), name="vase")
+
+
+@pytest.mark.parametrize("collision", [False, True])
+def test_patches_only_a_colliding_arm_reaches_are_refused(collision):
+    vase = _vase()
+    space = dataclasses.replace(SetupSpaceParams(), res_x=0.25, res_y=0.25, res_alpha=math.radians(90))
+    params = dataclasses.replace(SetupPlanParams(), space=space, sampling_method="uniform",
+                                 reach=ReachParams(check_collision=collision))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plan = plan_setups(vase, params=params)
+    n = len(vase.stain_faces)
+    if not collision:  # the IK alone reaches the floor through the 4.4 cm neck
+        assert plan.found and len(plan.uncoverable) == 0 and plan.collision_refused == 0
+    else:
+        assert len(plan.uncoverable) == n and plan.collision_refused == n
+        assert any("passing through the part" in w for w in plan.warnings)
+        assert plan.to_dict()["collision_refused"] == n
 
 
 def test_no_space_parameter_was_chosen_for_the_number_of_setups():
@@ -54,15 +120,19 @@ def test_no_space_parameter_was_chosen_for_the_number_of_setups():
     assert "reaches most" not in text and "Lower tables" not in text
 
 
-def test_synthetic_stain_is_one_contiguous_region_and_blobs_are_an_option():
+def test_synthetic_stain_is_spread_over_the_part_in_several_regions():
     for name in ("sine", "schwefel", "concave_bowl", "hyperboloid"):
-        part = load_part(name)
-        stained = set(part.stain_faces.tolist())
-        edges = [e for e in part.mesh.face_adjacency if e[0] in stained and e[1] in stained]
-        labels = trimesh.graph.connected_component_labels(np.array(edges), node_count=len(part.mesh.faces))
-        assert len(set(labels[part.stain_faces])) == 1, name
-    several = load_part("sine", stain_blobs=(3, 3))
-    assert not np.array_equal(several.stain_faces, load_part("sine").stain_faces)
+        for seed in (0, 1):
+            part = load_part(name, seed=seed)
+            stained = set(part.stain_faces.tolist())
+            edges = [e for e in part.mesh.face_adjacency if e[0] in stained and e[1] in stained]
+            labels = trimesh.graph.connected_component_labels(np.array(edges), node_count=len(part.mesh.faces))
+            assert len(set(labels[part.stain_faces])) >= 2, (name, seed)
+            assert 4000 <= len(part.stain_faces) <= 5000
+    assert not np.array_equal(load_part("sine", seed=1).stain_faces, load_part("sine").stain_faces)
+    assert np.array_equal(load_part("sine", seed=3).stain_faces, load_part("sine", seed=3).stain_faces)
+    one = load_part("sine", stain_blobs=(1, 1))
+    assert not np.array_equal(one.stain_faces, load_part("sine").stain_faces)
     with pytest.raises(ValueError, match="stain_blobs"):
         load_part("bowl", stain_blobs=(1, 1))
 

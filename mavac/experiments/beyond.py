@@ -163,8 +163,8 @@ def level1_instance(name: str, *, fine: SetupSpaceParams | None = None, wide_res
                     seed: int = 0) -> K.PlannerInstance:
     """Kabir's Tables V-VI instance of one object: level-1 grid, no descent, dominated removed.
 
-    The setup space is placed per object by the paper's procedure (:func:`K.placed_space`, as in
-    notebooks 06-08; cached on disk). The 36 level-1 setups do not depend on the fine grid, so they
+    The setup space is the one square of the four objects, placed by the paper's procedure
+    (:func:`K.placed_space`, as in notebooks 06-08; cached on disk). The 36 level-1 setups do not depend on the fine grid, so they
     are answered by the reach test directly (no uniform baseline sweep is needed).
     """
     reach_params = reach_params or ReachParams()

@@ -36,11 +36,11 @@ from ..planning.setcover import (dfbnb_setup_cover, execution_time_area_passes, 
                                  milp_setup_cover, setup_costs_from_times)
 from ..robots.models import puma560
 from ..planning.dominance import nondominated, pack_rows
-from ..setups.reach import (CountingReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
+from ..setups.reach import (CountingReach, FeasibleReach, PartReach, base_T_part, cached_reach_sweep, lookup_reach,
                             reach_targets_from_part)
-from ..setups.space import WIDE_RESOLUTION, box_summary, reaching_box, wide_setup_space
-from ..setups.sampling import (VARIANTS, EndpointMap, endpoint_maps, gradient_descent, hierarchical_sampling,
-                               random_sampling_on_map, uniform_setups, variant_plan)
+from ..setups.space import WIDE_RESOLUTION, box_summary, narrowed_square, pedestal_clear, wide_setup_space
+from ..setups.sampling import (VARIANTS, EndpointMap, coarse_resolution, endpoint_maps, gradient_descent,
+                               hierarchical_sampling, random_sampling_on_map, uniform_setups, variant_plan)
 from ..viz.plots import discrete_colorbar, new_figure, plot_mesh
 
 #: Kabir Fig. 6 / Tables II-VI objects, in the paper's order.
@@ -75,6 +75,9 @@ class Baseline:
     passes : (n,) int
     seed : int
         Stain seed of the part.
+    removed : int
+        Grid placements refused by the pedestal test (they reach nothing; still counted in
+        n_rfc, one reach-test call per grid setup as in the paper).
     """
 
     name: str
@@ -84,6 +87,7 @@ class Baseline:
     area: np.ndarray
     passes: np.ndarray
     seed: int = 0
+    removed: int = 0
 
     @property
     def coverable(self) -> np.ndarray:
@@ -102,76 +106,109 @@ class Baseline:
         return min_cover_size(self.cover[self.nondominated])
 
     def reach(self, reach_params: ReachParams):
-        """Exact reach function: grid setups from the sweep, others by the reach test."""
+        """Exact reach function: grid setups from the sweep, others by the reach test (setups
+        the pedestal test refuses reach nothing, as in the sweep)."""
         part = load_part(self.name, seed=self.seed)
-        live = PartReach(puma560(reach_params.tool_length), reach_targets_from_part(part), self.space,
-                         params=reach_params)
-        return lookup_reach(self.setups, self.cover, fallback=live)
+        robot = puma560(reach_params.tool_length)
+        live = PartReach(robot, reach_targets_from_part(part), self.space, params=reach_params,
+                         part_mesh=part.mesh if reach_params.check_collision else None)
+        clear = pedestal_clear(robot, part.mesh.vertices, self.space)
+        return lookup_reach(self.setups, self.cover, fallback=live if clear is None else FeasibleReach(live, clear))
 
 
 def _sweep(part, space: SetupSpaceParams, reach_params: ReachParams, n_jobs):
+    """Reach sweep of the uniform grid of ``space``; placements the pedestal test refuses are
+    removed before it (they reach nothing). Returns ``setups, cover, removed (k,) bool``."""
     targets = reach_targets_from_part(part)
     setups = uniform_setups(space)
-    cover = cached_reach_sweep(ROBOT, targets.positions, targets.axes, targets.patch_targets, setups,
-                               space, reach_params, n_jobs=n_jobs)
-    return setups, np.asarray(cover, dtype=bool)
+    clear = pedestal_clear(puma560(reach_params.tool_length), part.mesh.vertices, space)
+    keep = np.ones(len(setups), dtype=bool) if clear is None else clear(setups)
+    cover = np.zeros((len(setups), targets.n_patches), dtype=bool)
+    if keep.any():
+        cover[keep] = cached_reach_sweep(ROBOT, targets.positions, targets.axes, targets.patch_targets, setups[keep],
+                                         space, reach_params, n_jobs=n_jobs,
+                                         part_mesh=part.mesh if reach_params.check_collision else None)
+    return setups, cover, ~keep
 
 
-def placed_space(name: str, fine: SetupSpaceParams, reach_params: ReachParams, *,
-                 wide_resolution=WIDE_RESOLUTION, n_jobs: int | None = None, seed: int = 0):
-    """The object's setup space by the paper's procedure (Sec. IV-A): sweep a wide region at a
-    coarse resolution, drop the setups that reach no patch, box the rest (cached on disk).
+def paper_square(names, fine: SetupSpaceParams, reach_params: ReachParams, *, wide_resolution=WIDE_RESOLUTION,
+                 n_jobs: int | None = None, seed: int = 0):
+    """The one setup square of every object, by the paper's narrowing (Sec. IV-A) run over
+    ``names`` together (cached sweeps).
 
-    Parameters
-    ----------
-    fine : SetupSpaceParams
-        Resolution, alpha range and table height of the result.
-    wide_resolution : (3,) float
-        Coarse ``(m, m, rad)`` of the wide sweep.
+    One wide region (the table side of the robot, wide enough for the largest stain,
+    :func:`mavac.setups.space.wide_setup_space`) is swept at a coarse resolution for each object,
+    placements refused by the pedestal test removed first; the setups reaching no patch are
+    eliminated, and the 1 m square keeping the largest share of the rest, summed over the
+    objects, is kept (:func:`mavac.setups.space.narrowed_square`).
 
     Returns
     -------
     space : SetupSpaceParams
-    info : dict
-        ``object``, the wide region and its sweep (``wide_x_hi, wide_y_lo, wide_y_hi,
-        wide_setups, wide_reaching``) and :func:`mavac.setups.space.box_summary` of the box.
+        The square, at ``fine``'s resolution, alpha range and table height.
+    info : DataFrame
+        One row per object: ``wide_setups``, ``wide_removed_pedestal``, ``wide_reaching``,
+        ``reaching_in_square`` and its ``share``, the square's corners ``x_lo, x_hi, y_lo,
+        y_hi`` (base frame, m), and ``count_rule_x_lo, count_rule_y_lo``: the corner the other
+        reading of the rule picks (the most reaching setups of all objects together, unweighted).
     """
-    part = load_part(name, seed=seed)
+    parts = {name: load_part(name, seed=seed) for name in names}
     robot = puma560(reach_params.tool_length)
-    wide = wide_setup_space(robot, part.patch_vertices, base=fine, resolution=wide_resolution)
-    setups, cover = _sweep(part, wide, reach_params, n_jobs)
-    space = reaching_box(setups, cover, wide, fine=fine)
-    info = dict(object=name, wide_x_hi=wide.origin_x + wide.x_max, wide_y_lo=wide.origin_y,
-                wide_y_hi=wide.origin_y + wide.y_max, wide_setups=len(setups),
-                wide_reaching=int(cover.any(axis=1).sum()), **box_summary(space))
-    return space, info
+    every = np.concatenate([p.patch_vertices.reshape(-1, 3) for p in parts.values()])
+    wide = wide_setup_space(robot, every, base=fine, resolution=wide_resolution)
+    reaching, rows = {}, []
+    for name, part in parts.items():
+        setups, cover, removed = _sweep(part, wide, reach_params, n_jobs)
+        hit = cover.any(axis=1)
+        reaching[name] = setups[hit, :2] + [wide.origin_x, wide.origin_y]
+        rows.append(dict(object=name, wide_setups=len(setups), wide_removed_pedestal=int(removed.sum()),
+                         wide_reaching=int(hit.sum())))
+    space, scores = narrowed_square(wide, reaching, size=fine.x_max - fine.x_min, fine=fine)
+    by_count = scores[np.lexsort((scores[:, 0], -scores[:, 3]))[0]]  # the other reading: most setups in all
+    box = box_summary(space)
+    for row in rows:
+        xy = reaching[row["object"]]
+        inside = ((xy[:, 0] >= box["x_lo"] - 1e-9) & (xy[:, 0] <= box["x_hi"] + 1e-9)
+                  & (xy[:, 1] >= box["y_lo"] - 1e-9) & (xy[:, 1] <= box["y_hi"] + 1e-9))
+        row.update(reaching_in_square=int(inside.sum()), share=float(inside.mean()), **box,
+                   count_rule_x_lo=float(by_count[0]), count_rule_y_lo=float(by_count[1]))
+    return space, pd.DataFrame(rows)
+
+
+def placed_space(name: str, fine: SetupSpaceParams, reach_params: ReachParams, *,
+                 wide_resolution=WIDE_RESOLUTION, n_jobs: int | None = None, seed: int = 0):
+    """The setup space of ``name``: :func:`paper_square` of the four Table II objects (one for
+    all, Kabir IX-A), and that object's row of its ``info``."""
+    if name not in OBJECTS:
+        raise ValueError(f"name must be one of {OBJECTS}, got {name!r}")
+    space, info = paper_square(OBJECTS, fine, reach_params, wide_resolution=wide_resolution, n_jobs=n_jobs,
+                               seed=seed)
+    return space, info[info.object == name].iloc[0].to_dict()
 
 
 def baseline(name: str, space: SetupSpaceParams, reach_params: ReachParams, n_jobs: int | None = None,
              seed: int = 0) -> Baseline:
-    """Reach sweep of ``name`` over the uniform grid of ``space`` (cached on disk)."""
+    """Reach sweep of ``name`` (stain draw ``seed``) over the uniform grid of ``space`` (cached
+    on disk); ``removed`` counts the grid placements the pedestal test refused."""
     part = load_part(name, seed=seed)
-    setups, cover = _sweep(part, space, reach_params, n_jobs)
-    return Baseline(name, space, setups, cover, part.patch_areas, part.passes, seed)
+    setups, cover, removed = _sweep(part, space, reach_params, n_jobs)
+    return Baseline(name, space, setups, cover, part.patch_areas, part.passes, seed, int(removed.sum()))
 
 
 def placed_baselines(names, fine: SetupSpaceParams, reach_params: ReachParams, *,
                      wide_resolution=WIDE_RESOLUTION, n_jobs: int | None = None, seed: int = 0):
-    """:func:`baseline` of every object over its :func:`placed_space`.
+    """:func:`baseline` of every object over the one :func:`paper_square` of ``OBJECTS``
+    (placed with stain draw 0, whatever ``seed``: the square is placed once).
 
     Returns
     -------
     baselines : dict name -> Baseline
     spaces : DataFrame
-        One row per object, :func:`placed_space`'s ``info``.
+        :func:`paper_square`'s ``info`` for ``names``.
     """
-    baselines, rows = {}, []
-    for name in names:
-        space, info = placed_space(name, fine, reach_params, wide_resolution=wide_resolution, n_jobs=n_jobs,
-                                   seed=seed)
-        baselines[name] = baseline(name, space, reach_params, n_jobs=n_jobs, seed=seed)
-        rows.append(info)
-    return baselines, pd.DataFrame(rows)
+    space, info = paper_square(OBJECTS, fine, reach_params, wide_resolution=wide_resolution, n_jobs=n_jobs)
+    baselines = {name: baseline(name, space, reach_params, n_jobs=n_jobs, seed=seed) for name in names}
+    return baselines, info[info.object.isin(list(names))].reset_index(drop=True)
 
 
 def min_cover_size(cover) -> int:
@@ -229,13 +266,78 @@ def setup_costs(cover, area, passes, setup_time: float, cleaning_rate: float) ->
 def table2(baselines: dict) -> pd.DataFrame:
     """Kabir Table II: minimum number of setups and non-dominated setups of the uniform grid.
 
-    Columns ``object, setups, nondominated, n_rfc`` (n_rfc = grid size, one call per setup).
+    Columns ``object, seed, setups, nondominated, n_rfc`` (n_rfc = grid size, one call per
+    setup), ``removed_pedestal`` (grid placements the pedestal test refused), ``patches``,
+    ``coverable`` (patches some grid setup reaches) and ``complete_cover`` (every patch is).
     """
     rows = []
     for name, b in baselines.items():
-        nd = b.nondominated
-        rows.append(dict(object=name, setups=b.min_setups, nondominated=len(nd),
-                         n_rfc=len(b.setups)))
+        coverable = int(b.coverable.sum())
+        rows.append(dict(object=name, seed=b.seed, setups=b.min_setups, nondominated=len(b.nondominated),
+                         n_rfc=len(b.setups), removed_pedestal=b.removed, patches=b.cover.shape[1],
+                         coverable=coverable, complete_cover=coverable == b.cover.shape[1]))
+    return pd.DataFrame(rows)
+
+
+def level1_check(b: Baseline, reach_params: ReachParams, sampling: SamplingParams) -> dict:
+    """The 36 level-1 setups of hierarchical sampling (no descent) on ``b``'s square: how many
+    reach a patch, whether together they cover every patch the grid covers, and their
+    minimum cover (the paper's Table III finds a cover at level 1)."""
+    level1 = uniform_setups(b.space, coarse_resolution(b.space, sampling))
+    cover = b.reach(reach_params)(level1)
+    covered = cover.any(axis=0)
+    return dict(object=b.name, seed=b.seed, level1_setups=len(level1), level1_reaching=int(cover.any(axis=1).sum()),
+                level1_covers_coverable=bool(np.array_equal(covered, b.coverable)),
+                level1_min_setups=min_cover_size(cover[nondominated(cover)]) if covered.any() else 0)
+
+
+def acceptance_checks(baselines: dict, reach_params: ReachParams, sampling: SamplingParams) -> pd.DataFrame:
+    """The setup space's checks per object: ``n_rfc`` against the grid of its space,
+    ``removed_pedestal``, ``reached_from_pedestal`` (patches reached from a placement the pedestal
+    test refuses; 0 when none stands on it), ``level1_reaching`` of the 36 level-1 setups and
+    whether that is at least half, and whether level 1 covers what the grid covers."""
+    rows = []
+    robot = puma560(reach_params.tool_length)
+    for name, b in baselines.items():
+        clear = pedestal_clear(robot, load_part(name, seed=b.seed).mesh.vertices, b.space)
+        on = np.zeros(len(b.setups), dtype=bool) if clear is None else ~clear(b.setups)
+        level1 = level1_check(b, reach_params, sampling)
+        rows.append(dict(object=name, n_rfc=len(b.setups), grid_setups=len(uniform_setups(b.space)),
+                         removed_pedestal=b.removed, on_pedestal=int(on.sum()),
+                         reached_from_pedestal=int(b.cover[on].sum()), level1_reaching=level1["level1_reaching"],
+                         level1_half_reach=level1["level1_reaching"] * 2 >= level1["level1_setups"],
+                         level1_covers_coverable=level1["level1_covers_coverable"]))
+    return pd.DataFrame(rows)
+
+
+def table2_draws(names, space: SetupSpaceParams, reach_params: ReachParams, seeds, *,
+                 sampling: SamplingParams | None = None, n_jobs: int | None = None) -> pd.DataFrame:
+    """:func:`table2` with :func:`level1_check` for every stain draw (seed) of every object,
+    one baseline in memory at a time (sweeps cached on disk)."""
+    sampling = SamplingParams() if sampling is None else sampling
+    rows = []
+    for seed in seeds:
+        for name in names:
+            b = baseline(name, space, reach_params, n_jobs=n_jobs, seed=int(seed))
+            row = table2({name: b}).iloc[0].to_dict()
+            row.update({k: v for k, v in level1_check(b, reach_params, sampling).items() if k.startswith("level1")})
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def table2_summary(draws: pd.DataFrame) -> pd.DataFrame:
+    """Table II over stain draws: per object the median and range of ``setups`` and
+    ``nondominated``, n_rfc, and in how many draws the grid covers every patch and level 1
+    covers what the grid covers."""
+    rows = []
+    for name, g in draws.groupby("object", sort=False):
+        rows.append(dict(object=name, draws=len(g), setups=float(g.setups.median()), setups_min=int(g.setups.min()),
+                         setups_max=int(g.setups.max()), nondominated=float(g.nondominated.median()),
+                         nondominated_min=int(g.nondominated.min()), nondominated_max=int(g.nondominated.max()),
+                         n_rfc=int(g.n_rfc.iloc[0]), removed_pedestal=int(g.removed_pedestal.iloc[0]),
+                         complete_cover=f"{int(g.complete_cover.sum())} of {len(g)}",
+                         level1_reaching_min=int(g.level1_reaching.min()),
+                         level1_complete=f"{int(g.level1_covers_coverable.sum())} of {len(g)}"))
     return pd.DataFrame(rows)
 
 

@@ -67,6 +67,8 @@ PUMA560_QLIM_DEG = np.array(
 )
 # Robotics Toolbox for Python (models/DH/Puma560.py): "from mounting surface to shoulder axis".
 PUMA560_PEDESTAL_HEIGHT = 0.672
+# Ours, approximate like the link radii: the pedestal column under the shoulder, 0.10 m radius.
+PUMA560_PEDESTAL_RADIUS = 0.10
 
 ROBOT_NAMES = ("ur10_mobile", "puma560", "iiwa7")
 
@@ -327,7 +329,8 @@ def puma560(tool_length: float = 0.0) -> RobotModel:
     fid = {j: model.getFrameId(f"link{j}") for j in range(1, 7)}
     parts = [
         # pedestal under the shoulder housing (universe)
-        _cylinder_between("pedestal", 0, 0, [0, 0, -PUMA560_PEDESTAL_HEIGHT], [0, 0, -0.25], 0.10, grey),
+        _cylinder_between("pedestal", 0, 0, [0, 0, -PUMA560_PEDESTAL_HEIGHT], [0, 0, -0.25],
+                          PUMA560_PEDESTAL_RADIUS, grey),
         # shoulder housing: vertical cylinder around z0 (joint 1 frame)
         _cylinder_between("link1", joints[0], fid[1], [0, 0, -0.25], [0, 0, 0.10], 0.09, grey),
         # upper arm: from the shoulder to the elbow along x of joint 2, offset towards d3

@@ -265,7 +265,6 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
     state = np.where(far, np.int8(0), np.int8(-1))  # -1 unknown, 0 unreachable, 1 reachable
     pt = targets.patch_targets
     alive = ~(far[:, pt[:, 0]] | far[:, pt[:, 1]] | far[:, pt[:, 2]])
-    T = None
     for slot in range(3):
         col = pt[:, slot]
         rows, patches = np.nonzero(alive & (state[:, col] < 0))
@@ -278,19 +277,33 @@ def _chunk_reach(robot, targets, setups, space, params, bound, part_mesh) -> np.
             pos = np.stack([cs * p[:, 0] - ss * p[:, 1] + tx[si], ss * p[:, 0] + cs * p[:, 1] + ty[si],
                             p[:, 2] + space.table_z], axis=1)
             ax = np.stack([cs * a[:, 0] - ss * a[:, 1], ss * a[:, 0] + cs * a[:, 1], a[:, 2]], axis=1)
-            ok = ik_axis(robot, pos, ax, n_restarts=params.ik_restarts).success
-            if params.check_collision and ok.any():
-                T = base_T_part(setups, space) if T is None else T
-                ok[ok] = _collision_free(robot, pos[ok], ax[ok], si[ok], T, params, part_mesh)
-            state[si, ti] = ok
+            state[si, ti] = ik_axis(robot, pos, ax, n_restarts=params.ik_restarts).success
         alive &= state[:, col] == 1
+    if params.check_collision and alive.any():
+        rows, patches = np.nonzero(alive)
+        alive[rows, patches] = _collision_free(robot, targets, rows, patches, setups, space, params, part_mesh)
     return alive
 
 
-def _collision_free(robot, pos, ax, setup_index, base_T_parts, params, part_mesh) -> np.ndarray:
-    """Arm-vs-part check at a stand-off of ``collision_standoff`` along the normal (the tool
-    tip touches the surface at the target itself)."""
-    lifted = ik_axis(robot, pos - params.collision_standoff * ax, ax, n_restarts=params.ik_restarts)
+def _collision_free(robot, targets, rows, patches, setups, space, params, part_mesh) -> np.ndarray:
+    """Arm-vs-part check of each (setup, patch) pair the IK accepts, with the tool on the patch
+    centroid along its axis at a stand-off of ``collision_standoff`` (the tool tip touches the
+    surface at the patch itself); one arm pose per patch, the arm that would clean it."""
+    T = base_T_part(setups, space)
+    corners = targets.positions[targets.patch_targets[patches]]  # (p, 3, 3), part frame
+    axis = targets.axes[targets.patch_targets[patches]].mean(axis=1)
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    centre = corners.mean(axis=1) - params.collision_standoff * axis
+    R, t = T[rows, :3, :3], T[rows, :3, 3]
+    pos = np.einsum("kij,kj->ki", R, centre) + t
+    ax = np.einsum("kij,kj->ki", R, axis)
+    return _arm_clear(robot, pos, ax, rows, T, params, part_mesh)
+
+
+def _arm_clear(robot, pos, ax, setup_index, base_T_parts, params, part_mesh) -> np.ndarray:
+    """IK at each tool pose (base frame) and a collision test of that arm against the part (and
+    the table under it with ``support_plane``), (p,) bool."""
+    lifted = ik_axis(robot, pos, ax, n_restarts=params.ik_restarts)
     free = lifted.success.copy()
     obstacle = part_mesh
     if params.support_plane:  # the table under the part
@@ -394,12 +407,12 @@ def reach_sweep(reach: Callable[[np.ndarray], np.ndarray], setups, *, n_jobs: in
 
 
 def cached_reach_sweep(robot_name: str, positions, axes, patch_targets, setups, space: SetupSpaceParams,
-                       params: ReachParams, n_jobs: int | None = None) -> np.ndarray:
+                       params: ReachParams, n_jobs: int | None = None, *, part_mesh=None) -> np.ndarray:
     """:func:`reach_sweep` of a registry robot, cached on disk under :func:`mavac.config.cache_dir`.
 
     The key is the content of every argument but ``n_jobs`` (the answer does not depend on it).
     ``robot_name`` is built with ``load_robot(robot_name, tool_length=params.tool_length)``.
-    The collision check is not available here (it needs the part mesh).
+    With ``params.check_collision`` the part's mesh is part of the key (and of the test).
 
     Parameters
     ----------
@@ -407,15 +420,21 @@ def cached_reach_sweep(robot_name: str, positions, axes, patch_targets, setups, 
     patch_targets : (n, 3) int
         A :class:`ReachTargets`' arrays.
     setups : (k, 3) float
+    part_mesh : trimesh.Trimesh, optional
+        The part (part frame); required when ``params.check_collision``.
 
     Returns
     -------
     (k, n) bool
     """
-    if params.check_collision:
-        raise ValueError("params.check_collision needs the part mesh: use PartReach and reach_sweep")
-    return _sweep_cache()(robot_name, np.asarray(positions, float), np.asarray(axes, float),
-                          np.asarray(patch_targets, np.int64), np.asarray(setups, float), space, params, n_jobs)
+    args = (robot_name, np.asarray(positions, float), np.asarray(axes, float), np.asarray(patch_targets, np.int64),
+            np.asarray(setups, float), space, params)
+    if not params.check_collision:
+        return _sweep_cache()(*args, n_jobs)
+    if part_mesh is None:
+        raise ValueError("part_mesh is required when params.check_collision is True")
+    mesh = (np.asarray(part_mesh.vertices, float), np.asarray(part_mesh.faces, np.int64))
+    return _collision_sweep_cache()(*args, *mesh, n_jobs)
 
 
 @functools.lru_cache(maxsize=1)
@@ -423,10 +442,24 @@ def _sweep_cache():
     return verified_cache(_reach_sweep_by_name, ignore=["n_jobs"])
 
 
+@functools.lru_cache(maxsize=1)
+def _collision_sweep_cache():
+    return verified_cache(_collision_sweep_by_name, ignore=["n_jobs"])
+
+
 def _reach_sweep_by_name(robot_name, positions, axes, patch_targets, setups, space, params, n_jobs):
     # Cached body: editing it invalidates every stored sweep, so keep it minimal.
     robot = load_robot(robot_name, tool_length=params.tool_length)
     reach = PartReach(robot, ReachTargets(positions, axes, patch_targets), space, params=params)
+    return reach_sweep(reach, setups, n_jobs=n_jobs)
+
+
+def _collision_sweep_by_name(robot_name, positions, axes, patch_targets, setups, space, params, vertices, faces,
+                             n_jobs):
+    # Cached body of the sweep with the arm-vs-part collision test (its own entries).
+    robot = load_robot(robot_name, tool_length=params.tool_length)
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    reach = PartReach(robot, ReachTargets(positions, axes, patch_targets), space, params=params, part_mesh=mesh)
     return reach_sweep(reach, setups, n_jobs=n_jobs)
 
 

@@ -9,6 +9,7 @@ Patches that no candidate setup reaches are listed, never searched for.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings as _warnings
@@ -26,8 +27,9 @@ from ..planning.setcover import (
 )
 from ..robots.models import puma560
 from ..validate import check_callable
-from .reach import CountingReach, FeasibleReach, PartReach, reach_targets
+from .reach import CountingReach, FeasibleReach, PartReach, patch_reach, reach_targets
 from .sampling import hierarchical_sampling, random_sampling, uniform_sampling
+from .space import pedestal_clear
 from .unreachable import unreachable_causes, unreachable_message
 from .viewer import setup_plan_html
 
@@ -89,6 +91,9 @@ class SetupPlan:
         Proven lower bound on the optimum.
     certificate_proof : str or None
         What proved the optimum: "reduction", "enumeration", "lp" or "milp".
+    collision_refused : int
+        Patches left out (in ``uncoverable``) that the IK reaches from a sampled setup only with
+        the arm through the part or its table (0 without the reach test's collision check).
     """
 
     part_name: str
@@ -113,6 +118,7 @@ class SetupPlan:
     method: str = "auto"
     certificate_bound: float | None = None
     certificate_proof: str | None = None
+    collision_refused: int = 0
 
     def to_dict(self, timings: bool = False) -> dict:
         """Plain-JSON description: setups in order with their patches, costs, certificate, warnings.
@@ -132,6 +138,7 @@ class SetupPlan:
                         "patches": [int(i) for i in p], "reachable": [int(i) for i in r]}
                        for s, c, p, r in zip(self.setups, self.step_costs, self.patches, self.reachable)],
             "uncoverable": [int(i) for i in self.uncoverable],
+            "collision_refused": int(self.collision_refused),
             "uncoverable_causes": [str(c) for c in self.uncoverable_causes],
             "warnings": list(self.warnings),
         }
@@ -237,20 +244,25 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
     if robot is None:
         robot = puma560(tool_length=params.reach.tool_length)
     mesh = getattr(part, "mesh", None) if params.reach.check_collision else None
-    reach_fn = _reach_fn(robot, vertices, normals, params, mesh, feasible)
+    live = PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach, part_mesh=mesh)
+    tests = [t for t in (_pedestal(robot, part, vertices, params.space), feasible) if t is not None]
+    reach_fn = _reach_fn(live, tests)
     reach = CountingReach(reach_fn)
     sampled = _sample(reach, params)
     cover = sampled.nondominated_cover
     setups = sampled.nondominated_setups
-    if getattr(reach_fn, "dropped", 0):
-        notes.append(f"{reach_fn.dropped} of {reach.n_rfc} sampled setups dropped: {_why_dropped(feasible)}")
+    notes += _dropped_notes(reach_fn, reach.n_rfc)
     if len(setups) == 0:
+        refused, notes = _refused_note(live, sampled.setups, np.arange(n), tests, notes)
         causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
-        return _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
+        plan = _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
+        plan.collision_refused = refused
+        return plan
 
     res = _solve(cover, area, passes, params)
     patches, reachable = _patches_per_step(cover, res.setups)
     uncoverable = np.asarray(res.uncoverable, dtype=np.int64)
+    refused, notes = _refused_note(live, sampled.setups, uncoverable, tests, notes)
     causes, notes = _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes)
     _warn_all(notes)
     return SetupPlan(
@@ -260,7 +272,8 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
         n_rfc=reach.n_rfc, candidates=len(sampled.setups), nondominated=len(setups),
         certificate_cost=res.certificate_cost, certificate_gap=res.certificate_gap, status=res.status,
         uncoverable=uncoverable, seconds=time.perf_counter() - t0, uncoverable_causes=causes, warnings=notes,
-        method=params.method, certificate_bound=res.certificate_bound, certificate_proof=res.certificate_proof)
+        method=params.method, certificate_bound=res.certificate_bound, certificate_proof=res.certificate_proof,
+        collision_refused=refused)
 
 
 def _solve(cover, area, passes, params: SetupPlanParams):
@@ -291,12 +304,53 @@ def _sample(reach, params: SetupPlanParams):
     return random_sampling(reach, params.space, params.sampling, variant=params.variant, seed=params.seed)
 
 
-def _reach_fn(robot, vertices, normals, params, mesh, feasible):
-    """The part's reach test, reaching nothing from setups ``feasible`` refuses (when given)."""
-    reach_fn = PartReach(robot, reach_targets(vertices, normals), params.space, params=params.reach, part_mesh=mesh)
-    if feasible is None:
-        return reach_fn
-    return FeasibleReach(reach_fn, check_callable("feasible", feasible, "(setups (k, 3)) -> (k,) bool"))
+def _pedestal(robot, part, vertices, space):
+    """The pedestal test of the part's placements (footprint of its mesh, else of its stain)."""
+    mesh = getattr(part, "mesh", None)
+    return pedestal_clear(robot, vertices if mesh is None else mesh.vertices, space)
+
+
+def _reach_fn(live, tests):
+    """The part's reach test, reaching nothing from setups one of ``tests`` refuses (each a
+    :class:`FeasibleReach` layer, so each counts what it refused)."""
+    reach_fn = live
+    for test in tests:
+        reach_fn = FeasibleReach(reach_fn, check_callable("feasible", test, "(setups (k, 3)) -> (k,) bool"))
+    return reach_fn
+
+
+def _refused_note(live, setups, uncoverable, tests, notes):
+    """:func:`_collision_refused` and the warning list with a line saying it (when not 0)."""
+    refused = _collision_refused(live, setups, uncoverable, tests)
+    if refused:
+        notes = notes + [f"{refused} stain patches refused: the arm reaches them (IK) only by passing through the "
+                         "part or its table (collision check of the reach test)"]
+    return refused, notes
+
+
+def _collision_refused(live, setups, uncoverable, tests) -> int:
+    """Patches left out that the IK alone reaches from a sampled setup (the pedestal and
+    feasibility tests still apply): those only a colliding arm reaches. 0 without collision."""
+    if not live.params.check_collision or len(uncoverable) == 0 or len(setups) == 0:
+        return 0
+    for test in tests:
+        setups = setups[np.asarray(test(setups), dtype=bool)]
+    if len(setups) == 0:
+        return 0
+    ik_only = dataclasses.replace(live.params, check_collision=False)
+    sub = reach_targets(live.targets.positions[live.targets.patch_targets[uncoverable]],
+                        -live.targets.axes[live.targets.patch_targets[uncoverable, 0]])
+    return int(patch_reach(live.robot, sub, setups, live.space, params=ik_only).any(axis=0).sum())
+
+
+def _dropped_notes(reach_fn, n_rfc: int) -> list:
+    """One line per feasibility layer that refused sampled setups: how many and why."""
+    notes = []
+    while isinstance(reach_fn, FeasibleReach):
+        if reach_fn.dropped:
+            notes.append(f"{reach_fn.dropped} of {n_rfc} sampled setups dropped: {_why_dropped(reach_fn.feasible)}")
+        reach_fn = reach_fn.reach_fn
+    return notes
 
 
 def _why_dropped(feasible) -> str:
