@@ -10,7 +10,7 @@ planning makes most instances easy to prove:
    incumbent ``T``; since every setup costs at least ``c_min``, no cover of more than ``k``
    setups, the largest ``k`` whose ``k`` cheapest costs sum below ``T``, can beat it;
 3. an exact enumeration on Python-int bitsets over covers of 1, 2, ... setups improves the
-   incumbent and, once it reaches the size bound, proves it; past two setups it deepens only
+   incumbent and, once it reaches the size bound, proves it; past three setups it deepens only
    while that bound is small (``CertifyParams.max_enumerated_size``). It branches on the
    uncovered patch that the fewest setups reach (every cover holds one of them), cheapest
    setup first, excluding the setups tried in earlier branches, and prunes on cost;
@@ -220,9 +220,13 @@ def _size_bound(costs: np.ndarray, incumbent: float, rel_tol: float) -> int:
     return int(np.count_nonzero(cheapest < incumbent * (1.0 - rel_tol)))
 
 
-# Ours: covers of one and two setups are always searched (cheap: the rarest patch's setups and
-# their children), since finding one often brings the size bound within reach.
-_PROBE_DEPTH = 2
+# Ours: covers of up to three setups are always searched (cheap: the rarest patch's setups, their
+# children and grandchildren, pruned on cost), since finding one often brings the size bound
+# within reach. On the Table II Schwefel instance of the one setup square (1631 setups, greedy
+# 635.3 s with a size bound of 6) the third level finds the 3-setup optimum and proves it in
+# 144,446 nodes (3 CPU s), where the integer program took 744 CPU s; on OR-Library scp41-48 it
+# adds at most 135 nodes.
+_PROBE_DEPTH = 3
 
 
 def _enumerate(cover: np.ndarray, costs: list, best: list, best_cost: float, params: CertifyParams):
