@@ -1,5 +1,5 @@
 """MAVAC online benchmark: one paper-scale trial on the test bench (Algorithm 1 in pybullet),
-the paper's reading, seed 1.
+the paper's reading with HPR offline, seed 1.
 
 The offline plan comes from the disk cache (computed on the first run, not timed). Prints the
 trial's result and whether it equals the committed ``data/results/mavac_table2_trials.csv`` row
@@ -21,7 +21,7 @@ from mavac.config import DATA_DIR
 from mavac.experiments.mavac_online import offline_plan, online_params
 from mavac.geometry.machines import load_machine
 
-SCENE, READING, SEED = "test_bench", "paper", 1
+SCENE, READING, OFFLINE, SEED = "test_bench", "paper", "hpr", 1
 
 
 def committed_row() -> dict | None:
@@ -31,16 +31,18 @@ def committed_row() -> dict | None:
         return None
     table = pd.read_csv(path)
     hit = table[(table.scene == SCENE) & (table.reading == READING) & (table.seed == SEED)]
+    if "offline" in table.columns:
+        hit = hit[hit.offline == OFFLINE]
     return hit.iloc[0].to_dict() if len(hit) else None
 
 
 def main() -> None:
-    plan = offline_plan(SCENE, READING)
+    plan = offline_plan(SCENE, READING, offline=OFFLINE)
     machine = load_machine(SCENE)
     t0, c0 = time.perf_counter(), time.process_time()
     result = run_trial(machine, plan, params=online_params(READING), seed=SEED)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    print(f"{SCENE}, {READING} reading, seed {SEED}: {result.n_heaps} heaps, {result.n_cleaned} cleaned "
+    print(f"{SCENE}, {READING} reading, {OFFLINE} offline, seed {SEED}: {result.n_heaps} heaps, {result.n_cleaned} cleaned "
           f"({result.cleaning_pct:.1f} %, simulated), simulated time {result.times.sim_time_s:.0f} s, "
           f"{len(result.rrt_approach_seconds)} approach plans")
     row = committed_row()

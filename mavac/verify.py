@@ -66,7 +66,7 @@ OUTPUTS: dict[str, tuple[str, ...]] = {
            "results/mavac_hpr_radius.csv"),
     "04": ("results/mavac_plans.csv", "results/mavac_plan_*.json", "results/mavac_fig7.csv"),
     "05": ("results/mavac_table2_trials.csv", "results/mavac_table2.csv", "results/mavac_online_misses.csv",
-           "results/mavac_online_times.csv"),
+           "results/mavac_online_times.csv", "results/mavac_table2_sensitivity.csv", "results/mavac_table2_unseen.csv"),
     "06": ("results/kabir_setup_space.csv", "results/kabir_coverage.csv", "results/kabir_table2.csv",
            "instances/kabir_table2_*.npz", "results/kabir_table2_draws.csv", "results/kabir_table2_summary.csv",
            "results/kabir_table2_collision.csv", "results/kabir_table2_collision_summary.csv"),

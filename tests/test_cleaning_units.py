@@ -11,7 +11,7 @@ from mavac.cleaning.clustering import areas_from_nodes, tsp_order
 from mavac.cleaning.detection import detect_dust, dust_mask, match_nodes
 from mavac.cleaning.filters import filter_nodes
 from mavac.cleaning.heaps import DustField
-from mavac.cleaning.misses import HeapEvents, cause_counts, in_frustum, miss_causes, near_frustum
+from mavac.cleaning.misses import HeapEvents, cause_counts, in_frustum, mark_blobs, miss_causes, near_frustum
 from mavac.cleaning.timing import TrialTimes, base_path_length
 from mavac.cleaning.vacuum import spiral_path
 from mavac.params import ApproachParams, DetectionParams, DustParams, OnlineParams, VacuumParams
@@ -119,17 +119,35 @@ def test_base_path_goes_around_the_machine():
 
 
 def test_miss_cause_is_the_furthest_stage():
-    ev = HeapEvents.empty(8)
+    ev = HeapEvents.empty(9)
     ev.mark("in_skipped_view", [1, 2])
-    ev.mark("in_frustum", [2, 3, 4, 5, 6, 7])
-    ev.mark("in_image", [3, 4, 5, 6, 7, -1])
-    ev.mark("no_approach", [4])
-    ev.mark("planner_failed", [5])
-    ev.mark("attempted", [6, 7])
-    causes = miss_causes(ev, [False, False, False, False, False, False, False, True])
-    assert causes.tolist() == ["never in view", "guard not reached", "hidden", "filtered", "no approach found",
-                               "planner failed", "vacuum missed", ""]
-    assert sum(cause_counts(causes).values()) == 7
+    ev.mark("in_frustum", [2, 3, 4, 5, 6, 7, 8])
+    ev.mark("in_image", [3, 4, 5, 6, 7, 8, -1])
+    ev.mark("merged", [4, 8])
+    ev.mark("own_blob", [3, 8])  # heap 8 had a blob of its own in another image: not merged
+    ev.mark("no_approach", [5])
+    ev.mark("planner_failed", [6])
+    ev.mark("attempted", [7])
+    causes = miss_causes(ev, [False] * 8 + [True])
+    assert causes.tolist() == ["never in view", "guard not reached", "hidden", "filtered", "merged blob",
+                               "no approach found", "planner failed", "vacuum missed", ""]
+    assert sum(cause_counts(causes).values()) == 8
+
+
+def test_merged_blob_is_told_from_a_blob_of_its_own():
+    """Blob 0 holds heaps 1 and 2, its node matched heap 2: heap 1 is merged. Blob 1 holds only
+    heap 3 (its node matched nothing): its own. Heap 4 is drawn outside every kept blob."""
+    blobs = np.array([[0, 0, -1, 1], [0, 0, -1, 1], [-1, -1, -1, -1]])
+    seg = np.array([[1, 2, 4, 3], [1, 2, -1, 3], [-1, -1, -1, -1]])
+    ev = HeapEvents.empty(5)
+    ev.mark("in_image", [1, 2, 3, 4])
+    mark_blobs(ev, blobs, seg, np.array([2, -1]))
+    assert ev.merged.tolist() == [False, True, False, False, False]
+    assert ev.own_blob.tolist() == [False, False, True, True, False]
+    assert miss_causes(ev, np.zeros(5, dtype=bool)).tolist() == ["never in view", "merged blob", "filtered",
+                                                                 "filtered", "filtered"]
+    mark_blobs(ev, blobs, seg, np.array([-1, -1]))  # a node that matched neither: both merged
+    assert ev.merged[2]
 
 
 def test_frustum_and_matching():

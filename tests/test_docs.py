@@ -45,20 +45,23 @@ def test_missing_csv_or_column_says_not_run(tmp_path, monkeypatch):
     assert "not run" in docs_results.readme_block(list(secs.values()))
 
 
-def test_table2_reads_both_readings_scenes_and_regions(tmp_path, monkeypatch):
-    trials = pd.DataFrame([dict(reading=r, scene=sc, trial=t, seed=t, heaps=10, cleaned=c, uncleaned=10 - c,
-                                cleaning_pct=10.0 * c, precision=1.0, recall=0.9, sim_time_s=600.0,
-                                open_heaps=8, open_cleaned=min(c, 8), enclosed_heaps=2, enclosed_cleaned=max(c - 8, 0))
-                           for r, base in (("paper", 8), ("authors", 4))
+def test_table2_has_one_column_per_variant_and_the_sensitivity_beside_it(tmp_path, monkeypatch):
+    trials = pd.DataFrame([dict(reading=r, offline=o, scene=sc, trial=t, seed=t, heaps=10, cleaned=c, uncleaned=10 - c,
+                                cleaning_pct=10.0 * c, sim_time_s=600.0, open_heaps=8, open_cleaned=min(c, 8),
+                                enclosed_heaps=2, enclosed_cleaned=max(c - 8, 0))
+                           for r, o, base in (("paper", "hpr", 8), ("paper", "raycast", 6), ("authors", "hpr", 4))
                            for sc in ("test_bench", "sanding_milling") for t, c in ((1, base - 1), (2, base + 1))])
     trials.to_csv(tmp_path / "mavac_table2_trials.csv", index=False)
     mon.table2(trials).to_csv(tmp_path / "mavac_table2.csv", index=False)
+    pd.DataFrame([dict(dimension="nominal", value=None, seeds="1 2", heaps=156.0, cleaning_pct=70.0, cleaning_pct_min=60.0,
+                       cleaning_pct_max=80.0, unseen=3.5)]).to_csv(tmp_path / "mavac_table2_sensitivity.csv", index=False)
     monkeypatch.setattr(docs_results, "RESULTS_DIR", tmp_path)
     part = docs_results.mavac_table2()
-    assert "| paper-style mean, all trials of both tests | 84.0 % | 80.0 % (70.0-90.0) | 40.0 % (30.0-50.0) |" in part.body
-    assert "| test bench | 87.8 % |" in part.body and "| sanding + milling (one test) | 80.2 % |" in part.body
+    assert "ours, paper's text, HPR offline | ours, paper's text, ray casting offline |" in part.body
+    assert "| paper-style mean, all trials of both tests | 84.0 % | 80.0 % (70.0-90.0) | 60.0 % (50.0-70.0) |" in part.body
+    assert "| nominal | — | 1 2 | 156 | 70.0 % (60.0-80.0) | 3.5 |" in part.body
     assert "| enclosed heaps, both tests | — | 25.0 % of 2 heaps/trial |" in part.body
-    assert part.paper_says.startswith("84 %") and "authors' code 40.0 % (test bench 40.0 %, sanding + milling 40.0 %)" in part.ours
+    assert "authors' code (4a4038c), HPR offline 40.0 % (test bench 40.0 %, sanding + milling 40.0 %)" in part.ours
 
 
 def _modules_on_disk() -> set[str]:

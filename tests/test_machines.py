@@ -84,13 +84,13 @@ def test_sanding_milling_holds_both_machines_and_their_heaps():
     # Poisson-disk elimination over the pair splits the heaps by area up to a few heaps
     assert abs(on_left.sum() - len(dust_heaps(load_machine("sanding_machine"), seed=1))) <= 4
     assert abs(on_right.sum() - len(dust_heaps(load_machine("milling_machine"), seed=1))) <= 4
-    assert on_left.sum() > 40 and on_right.sum() > 60
+    assert on_left.sum() > 60 and on_right.sum() > 40
 
 
 @pytest.mark.parametrize("name", SCENE_NAMES)
 def test_exposed_area_is_at_least_the_discussions_5_m2(name):
     """The Discussion's 5-6 m^2 cannot hold beside Table 2's heap counts (see the module
-    docstring): the lower bound holds, the upper one is exceeded (6.5 and 8.9 m^2)."""
+    docstring): the lower bound holds, the upper one is exceeded (6.5 and 7.2 m^2)."""
     machine = load_machine(name)
     assert exposed_area(machine) >= paper_scalar("mavac", "Discussion", "exposed_area_min")
     assert np.all((machine.mesh.extents > 0.5) & (machine.mesh.extents < 3.0))
@@ -196,3 +196,90 @@ def test_named_constructors_match_load_machine():
         machine = build()
         assert machine.name == name
         np.testing.assert_array_equal(machine.mesh.faces, load_machine(name).mesh.faces)
+
+
+@pytest.mark.parametrize("stand_in", [machines.StandIn(), machines.StandIn(mill_bench_height=0.3, mill_sill=0.07),
+                                      machines.StandIn(sander_shelf="closed")])
+def test_stand_ins_are_clean_solids_and_the_nominal_one_holds_table_2s_heaps(stand_in):
+    pair = load_machine("sanding_milling", stand_in=stand_in).mesh
+    assert pair.is_watertight and pair.is_winding_consistent and pair.body_count == 2
+    assert pair.bounds[0, 2] == pytest.approx(0.0)
+    heaps = len(dust_heaps(load_machine("sanding_milling", stand_in=stand_in), seed=1))
+    if stand_in.sander_shelf == "open":  # the shelf's floor holds dust; the mill's free dimensions move none
+        assert abs(heaps - 156.2) <= 2  # Table 2's mean (module docstring)
+    else:
+        assert heaps < 140
+
+
+def test_mill_is_the_srm20_with_its_roof_where_a_downward_camera_reaches():
+    mill = load_machine("milling_machine").mesh
+    heights = machines.mill_heights()
+    assert heights["roof"] == pytest.approx(mill.bounds[1, 2])
+    assert heights["roof"] - machines.MILL_BENCH_HEIGHT == pytest.approx(machines.MILL_BODY_SIZE[2])
+    L_d = 0.5  # CameraParams.L_d: the guard stand-off
+    assert heights["roof"] <= machines.DOWNWARD_CAMERA_MAX_Z - L_d
+
+
+def test_downward_camera_reach_is_what_the_robot_kinematics_give():
+    """DOWNWARD_CAMERA_MAX_Z: the highest camera with its optical axis within 10 deg of straight
+    down, 0.85 m from the base centre (pinocchio forward kinematics, SLSQP from fixed starts)."""
+    import pinocchio as pin
+    from scipy.optimize import minimize
+
+    from mavac.robots.models import ur10_mobile
+
+    robot = ur10_mobile()
+    model, data = robot.model, robot.model.createData()
+    camera = model.getFrameId("camera")
+    lo, hi = np.maximum(robot.q_lower, -np.pi), np.minimum(robot.q_upper, np.pi)
+
+    def pose(q):
+        pin.framesForwardKinematics(model, data, q)
+        return data.oMf[camera]
+
+    constraints = [dict(type="ineq", fun=lambda q: -pose(q).rotation[2, 0] - np.cos(np.radians(10.0))),
+                   dict(type="ineq", fun=lambda q: np.hypot(*pose(q).translation[:2]) - 0.85)]
+    best = -np.inf
+    for q0 in np.random.default_rng(1).uniform(lo, hi, size=(30, len(lo))):
+        res = minimize(lambda q: -pose(q).translation[2], q0, bounds=list(zip(lo, hi)), constraints=constraints,
+                       method="SLSQP", options=dict(maxiter=200))
+        if res.success and all(c["fun"](res.x) > -1e-4 for c in constraints):
+            best = max(best, -res.fun)
+    assert best == pytest.approx(machines.DOWNWARD_CAMERA_MAX_Z, abs=0.01)
+
+
+@pytest.mark.parametrize("visibility", ["hpr", "raycast"])
+def test_plan_sees_the_enclosure_floor_and_the_roof_from_above(visibility):
+    """The paper's robot "detected dust inside the box" of the mill, and misses no surface it
+    names: the offline plan of the mill stand-in (fast sizes) observes part of the enclosure
+    floor through the opening, and the roof from a camera above it looking down. Fails on the
+    previous stand-in (a 7 cm lip in front of the floor, roof at 1.15 m)."""
+    import warnings
+
+    from mavac.experiments.mavac_offline import fast_params
+    from mavac.inspection.inspection_plan import plan_inspection
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # low coverage warns
+        plan = plan_inspection(load_machine("milling_machine"), params=fast_params().with_visibility(visibility))
+    heights = machines.mill_heights()
+    up = plan.normals[:, 2] > 0.9
+    floor = up & (np.abs(plan.points[:, 2] - heights["enclosure_floor"]) < 0.005)
+    roof = up & (np.abs(plan.points[:, 2] - heights["roof"]) < 0.005)
+    assert floor.sum() >= 5 and roof.sum() >= 5
+    visible = plan.pose_set.visible
+    assert visible[:, floor].any(axis=0).sum() >= 1  # the floor is seen
+    cameras = plan.pose_set.world_T_camera
+    above = (cameras[:, 2, 3] > heights["roof"] + 0.2) & (cameras[:, 2, 0] < -0.7)  # optical axis = camera x
+    assert visible[np.ix_(above, roof)].any(axis=0).mean() >= 0.5  # most of the roof seen from above
+
+
+def test_stand_in_refuses_bad_dimensions():
+    with pytest.raises(ValueError, match="mill_bench_height"):
+        machines.StandIn(mill_bench_height=2.0)
+    with pytest.raises(ValueError, match="mill_sill"):
+        machines.StandIn(mill_sill=-0.01)
+    with pytest.raises(ValueError, match="sander_shelf"):
+        machines.StandIn(sander_shelf="half")
+    with pytest.raises(TypeError, match="stand_in"):
+        load_machine("milling_machine", stand_in=(0.45, 0.0, "open"))

@@ -15,16 +15,23 @@ def test_readings_are_spelled_once():
     assert READINGS == ("paper", "authors")
 
 
-def test_paper_reading_is_the_package_default():
-    assert online_params("paper") == OnlineParams()
-    assert online_params() == OnlineParams()
+def test_paper_reading_is_the_package_default_with_the_authors_alpha_and_delta():
+    """The paper gives no alpha or delta (eq. 5): the paper reading takes the authors' (20 deg,
+    doosan.py:417; 5 cm, online.py:182-184 at 4a4038c); the package defaults stay ours."""
+    paper = online_params("paper")
+    assert paper.approach.alpha == pytest.approx(math.radians(20.0)) and paper.approach.delta == 0.05
+    assert OnlineParams().approach.alpha == pytest.approx(math.radians(15.0)) and OnlineParams().approach.delta == 0.10
+    default = OnlineParams()
+    assert dataclasses.replace(paper, approach=default.approach) == default
+    assert online_params() == paper
 
 
 def test_authors_reading_differs_where_the_code_does():
     paper, authors = online_params("paper"), online_params("authors")
-    assert paper.detection.max_tip_distance is None and authors.detection.max_tip_distance == 0.5
-    assert (authors.approach.cluster_eps, authors.approach.cluster_min_samples) == (0.1, 2)
-    assert authors.approach.delta == 0.05 and authors.approach.alpha == 0.0
+    # 4a4038c: online.py:191 (0.7 m), dust.py:138-141 (eps 0.13, noise kept), doosan.py:417 (20 deg)
+    assert paper.detection.max_tip_distance is None and authors.detection.max_tip_distance == 0.7
+    assert (authors.approach.cluster_eps, authors.approach.cluster_min_samples) == (0.13, 1)
+    assert authors.approach.delta == 0.05 and authors.approach.alpha == pytest.approx(math.radians(20.0))
     assert authors.approach.area_order == "tsp" and paper.approach.area_order == "detection"
     assert paper.vacuum.pattern == "linear" and authors.vacuum.pattern == "spiral"
     assert (authors.vacuum.spiral_radius, authors.vacuum.spiral_turns, authors.vacuum.spiral_time) == (0.01, 2.0, 5.0)
@@ -54,9 +61,23 @@ def test_non_string_reading_is_a_type_error():
         online_params(1)
 
 
+def test_offline_reading_is_hpr_and_ray_casting_stays_the_package_default():
+    assert mp.InspectionParams().visibility.method == "raycast"
+    assert inspection_params("paper") == mp.InspectionParams().with_visibility("hpr")
+    assert inspection_params("paper", offline="raycast") == mp.InspectionParams()
+    assert inspection_params("authors", offline="raycast").visibility.method == "raycast"
+    with pytest.raises(ValueError, match="offline must be one of"):
+        inspection_params("paper", offline="HPR")
+
+
+def test_variants_are_each_reading_with_hpr_and_the_paper_with_ray_casting():
+    from mavac.cleaning.readings import VARIANTS
+
+    assert VARIANTS == (("paper", "hpr"), ("paper", "raycast"), ("authors", "hpr"))
+
+
 def test_authors_offline_reading():
     paper, authors = inspection_params("paper"), inspection_params("authors")
-    assert paper == mp.InspectionParams()
     assert authors.camera.theta_a == pytest.approx(math.radians(45)) and authors.camera.theta_b == pytest.approx(math.radians(35))
     assert authors.camera.L_d == 0.7 and authors.guard.standoff == 0.4
     assert authors.visibility == mp.Visibility("hpr", radius=10.0)
@@ -64,7 +85,7 @@ def test_authors_offline_reading():
 
 
 def test_fast_mode_scales_the_authors_dbscan_radius_with_the_heap_spacing():
-    assert online_params("authors", fast=True).approach.cluster_eps == pytest.approx(0.2)
+    assert online_params("authors", fast=True).approach.cluster_eps == pytest.approx(0.26)
     assert online_params("paper", fast=True).approach == online_params("paper").approach
 
 
@@ -95,7 +116,8 @@ def test_differences_lists_exactly_the_fields_that_differ():
 
     table = differences()
     online = table[table.stage == "online"].set_index("parameter")
-    assert online.loc["approach.delta", "authors"] == 0.05 and online.loc["approach.delta", "paper"] == 0.10
+    assert online.loc["detection.max_tip_distance", "authors"] == 0.7
+    assert "approach.delta" not in online.index and "approach.alpha" not in online.index  # both the authors'
     assert "time_step" not in online.index  # equal in both readings: not listed
     offline = table[table.stage == "offline"].set_index("parameter")
     assert offline.loc["guard.standoff", "authors"] == 0.4

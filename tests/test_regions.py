@@ -62,12 +62,15 @@ def test_scenes_have_open_and_enclosed_heaps(name):
 def test_milling_box_holds_enclosed_heaps():
     """MAVAC: the robot "detected dust inside the box" of the milling machine: our enclosure's
     floor and table carry heaps, all of them under the enclosure's roof."""
+    from mavac.geometry.machines import MILL_BODY_SIZE, mill_heights
+
     machine = load_machine("milling_machine")
     heaps = dust_heaps(machine, seed=1)
-    roof = machine.mesh.bounds[1, 2]
-    inside = (heaps[:, 2] > 0.6) & (heaps[:, 2] < roof - 0.05)
-    inside &= np.abs(heaps[:, 0] - machine.mesh.bounds[0, 0] - 0.375) < 0.34  # within the shell
-    assert inside.sum() > 10
+    heights = mill_heights()
+    inside = (heaps[:, 2] > heights["enclosure_floor"] - 0.01) & (heaps[:, 2] < heights["roof"] - 0.05)
+    inside &= np.abs(heaps[:, 0]) < MILL_BODY_SIZE[0] / 2 - 0.01  # within the casing (the mill is centred)
+    inside &= np.abs(heaps[:, 1]) < MILL_BODY_SIZE[1] / 2  # not on the bench top in front or behind
+    assert inside.sum() >= 10
     assert np.all(heap_regions(machine, heaps[inside]) == ENCLOSED)
 
 

@@ -9,7 +9,7 @@ never used here: :func:`match_nodes` scores detections against the true heaps af
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,12 +32,16 @@ class Detection:
         Blob sizes, px.
     centroids : (k, 2) float
         Blob centroids ``(u, v)``, px.
+    blobs : (h, w) int or None
+        Index of the node whose blob holds each pixel, -1 elsewhere (scoring uses it to tell
+        heaps whose blob merged with a neighbour's).
     """
 
     nodes: np.ndarray
     depth: np.ndarray
     pixels: np.ndarray
     centroids: np.ndarray
+    blobs: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __len__(self) -> int:
         return int(len(self.nodes))
@@ -82,8 +86,11 @@ def detect_dust(rgb, depth_m, K, world_T_camera, params: DetectionParams) -> Det
         raise ValueError(f"depth_m must have the image's shape {mask.shape}, got {depth.shape}")
     n, labels, stats, centroids = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
     keep = [i for i in range(1, n) if stats[i, cv2.CC_STAT_AREA] >= params.min_blob_px]
+    node_of_label = np.full(n, -1, dtype=np.int64)
+    node_of_label[keep] = np.arange(len(keep))
+    blobs = node_of_label[labels]
     if not keep:
-        return Detection(np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 2)))
+        return Detection(np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 2)), blobs)
     flat_labels, flat_depth = labels.reshape(-1), depth.reshape(-1)
     z = np.full(len(keep), np.nan)
     for j, i in enumerate(keep):
@@ -96,7 +103,7 @@ def detect_dust(rgb, depth_m, K, world_T_camera, params: DetectionParams) -> Det
     ok = np.isfinite(z)
     if ok.any():
         nodes[ok] = back_project(uv[ok], z[ok], K, world_T_camera)
-    return Detection(nodes, z, stats[keep, cv2.CC_STAT_AREA].astype(np.int64), uv)
+    return Detection(nodes, z, stats[keep, cv2.CC_STAT_AREA].astype(np.int64), uv, blobs)
 
 
 def match_nodes(nodes, heaps, radius: float) -> np.ndarray:

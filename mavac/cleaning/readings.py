@@ -2,53 +2,56 @@
 
 The MAVAC authors published their ROS code (GitHub ``will-44/cleaning``, under
 ``rubyrhod_ws/src/cleaning/``, no licence: we take facts and parameters from it, with a
-citation beside each in :mod:`mavac.params`, and copy no code). Where the text is silent or
-differs, :func:`online_params` and :func:`inspection_params` give either reading; the package
-defaults are the paper's text (or ours where the text gives no value).
+citation beside each, and copy no code). The "authors" reading is one commit of it, 4a4038c
+("End of test", 2023-11-30, the last commit before the article-video one); the "paper" reading
+is the paper's text, with the authors' values where the text gives none (alpha, delta) and ours
+where neither does. Package defaults (:mod:`mavac.params`) stay ours for users: ray casting
+offline, alpha 15 deg and delta 0.10 m.
+
+Citations are ``file:line`` at 4a4038c (``script/`` = ``rubyrhod_ws/src/cleaning/script/``,
+``doosan.py`` = ``rubyrhod_ws/src/utility/script/utility/doosan.py``).
 
 =========================== =============================== ===================================
-parameter                   "paper" (package default)       "authors" (will-44/cleaning)
+parameter                   "paper"                         "authors" (4a4038c)
 =========================== =============================== ===================================
-online depth validity       sensor range 0.25-2.88 m; the   same (the code has no depth cut)
-                            text has no online cut at L_d
-reach filter                shoulder reach + tool, 1.7 m    same (ours; the tip filter is
-                                                            stricter)
-tip-distance filter         none (the text has none)        < 0.5 m from the vacuum tip
-                                                            (online.py; dust.py, filter_dust)
-duplicate filter            off (in neither)                off
-DBSCAN eps, min_samples     0.15 m, 1 (ours: no value)      0.1 m, 2 (dust.py, dust_path;
-                                                            pyclustering neighbours=1)
-node order in an area       TSP (Algorithm 1, line 4)       TSP (older online.py TSPs all
-                                                            nodes; the last keeps DBSCAN's
-                                                            expansion order)
-area order                  detection (text silent)         TSP (dust.py, dust_path)
-approach delta, alpha       0.10 m, 15 deg (ours)           0.05 m, 0 (online.py:
-                                                            vacuum_safe_tcp, exact guard pose)
-vacuum motion               linear moves (text)             linear + spiral, 2 turns, 10 mm,
-                                                            5 s at the last node (online.py)
-impedance stiffness         1000 N/m, 30 N m/rad (ours)     100 N/m, 20 N m/rad (online.py,
-                                                            set_compliance)
-vacuum speed                0.10 m/s (ours)                 0.02 m/s (doosan.py, dsr_go_to_l)
+offline visibility          HPR (the text, "Camera FOV"),   HPR, absolute radius 10
+                            radius factor 10 (ours);        (class_fov_emulator.py:105-106)
+                            Table 2 also with ray casting
 FOV half-angles, depth      package default (text: L_d)     45 deg, 35 deg, 0.7 m "A definir"
-                                                            (class_fov_emulator.py)
-guard stand-off             L_d along the normal (text)     0.4 m (offline.py,
-                                                            generate_pcd_guard)
-HPR radius                  package default                 absolute 10
-                                                            (get_visible_point_pyramid)
+                                                            (class_fov_emulator.py:81-83)
+guard stand-off             L_d along the normal (text)     0.4 m (offline.py:426,
+                                                            generate_pcd_guard dist=0.4)
+online depth validity       sensor range 0.25-2.88 m        same (the code has no depth cut)
+tip-distance filter         none (the text has none)        < 0.7 m from the vacuum tip
+                                                            (online.py:191, filter_dust
+                                                            dist=0.7; dust.py:108)
+DBSCAN eps, min_samples     0.15 m, 1 (ours: no value)      0.13 m, noise kept as one-node
+                                                            areas (dust.py:138-141: pyclustering
+                                                            neighbours=1, noise appended as
+                                                            clusters = scikit-learn
+                                                            min_samples 1)
+area order                  detection (text silent)         TSP (dust.py:130-160, dust_path)
+approach delta              0.05 m (authors' code)          0.05 m (online.py:182-184,
+                                                            vacuum_safe_tcp "add 5cm")
+approach alpha (eq. 5)      20 deg (authors' code)          20 deg (doosan.py:399 go_to_l,
+                                                            :417 set_goal_orientation_tolerance
+                                                            (np.deg2rad(20)); RRTConnect at
+                                                            doosan.py:58-59)
+vacuum motion               linear moves (text)             linear + spiral, 2 turns, 10 mm,
+                                                            5 s at the last node (online.py:273)
+impedance stiffness         1000 N/m, 30 N m/rad (ours)     100 N/m, 20 N m/rad (online.py:255)
+vacuum speed                0.10 m/s (ours)                 0.02 m/s (doosan.py:522, move_line
+                                                            velocity [20, 0] mm/s)
 =========================== =============================== ===================================
 
-Files read (will-44/cleaning, stored versions): ``script/online.py`` at bc1a1a1 (the last
-version, JSON offline trajectory; d604abf is the older one that TSPs every node and pushes
-30 mm along the tool axis without compliance), ``script/dust.py``, ``script/offline.py`` and
-``script/class_fov_emulator.py`` at 1d03546, ``script/open3d_tools.py`` at 1439c0c,
-``script/robot.py`` and ``rubyrhod_ws/src/utility/script/utility/doosan.py`` at 4a4038c.
-
-Facts of the authors' code not made options: they solve the TSP with ``fast_tsp.find_tour``
-under a 2 s wall-clock budget (``script/robot.py``, ``Robot.generate_trajectory``; we solve
-deterministically, :func:`mavac.cleaning.clustering.tsp_order`); after an area the tool goes
-back to its first node then 75 mm back along the tool axis (``online.py``,
-``dsr_go_relatif([0, 0, -75, 0, 0, 0])``), where we return to the approach point as the text
-says.
+The article-video commit bc1a1a1 ("Modif for creation of article video") differs: tip filter
+0.5 m (``script/online.py:198``) and DBSCAN eps 0.05 m, noise kept (``script/dust.py:143-145``).
+An earlier reading of ours mixed bc1a1a1's tip filter with 1d03546's DBSCAN (eps 0.1 m, noise
+dropped). Not modelled: ``filter_dust`` also drops nodes within 5 cm of the tool along its axis
+(``dust.py:113``); the authors solve the TSP with ``fast_tsp`` under a 2 s wall-clock budget
+(``script/robot.py``; we solve deterministically, :func:`mavac.cleaning.clustering.tsp_order`);
+after an area the tool goes back to its first node then 75 mm back along the tool axis
+(``online.py:289-297``), where we return to the approach point as the text says.
 """
 
 from __future__ import annotations
@@ -60,8 +63,16 @@ from ..params import ApproachParams, CameraParams, DetectionParams, DustParams, 
 
 #: the two readings, paper's text first
 READINGS = ("paper", "authors")
+#: offline visibility methods (:data:`mavac.params.VISIBILITY_METHODS`)
+OFFLINE_METHODS = ("hpr", "raycast")
+#: Table 2's variants, (reading, offline method): each reading with the paper's HPR, and the
+#: paper reading again with ray casting (the package default for users)
+VARIANTS = (("paper", "hpr"), ("paper", "raycast"), ("authors", "hpr"))
 #: fast mode's heap spacing, m (as :func:`mavac.experiments.mavac_online.online_params`)
 FAST_SPACING = 0.2
+#: eq. 5's alpha and delta of the authors' code (doosan.py:417; online.py:182-184 at 4a4038c),
+#: taken by both readings since the paper gives no value
+AUTHORS_ALPHA, AUTHORS_DELTA = math.radians(20.0), 0.05
 
 
 def check_reading(reading) -> str:
@@ -74,12 +85,25 @@ def check_reading(reading) -> str:
     return reading
 
 
+def check_offline(offline) -> str:
+    """``offline`` if it is one of :data:`OFFLINE_METHODS`; ``ValueError`` otherwise."""
+    if offline not in OFFLINE_METHODS:
+        raise ValueError(f"offline must be one of {OFFLINE_METHODS}, got {offline!r}")
+    return offline
+
+
+def _paper_online() -> OnlineParams:
+    """The package defaults with eq. 5's alpha and delta of the authors' code."""
+    params = OnlineParams()
+    return replace(params, approach=replace(params.approach, alpha=AUTHORS_ALPHA, delta=AUTHORS_DELTA))
+
+
 def _authors_online() -> OnlineParams:
-    """The online parameters of will-44/cleaning (sources in :mod:`mavac.params`)."""
+    """The online parameters of will-44/cleaning at 4a4038c (sources in the module docstring)."""
     return OnlineParams(
-        detection=DetectionParams(max_tip_distance=0.5),
-        approach=ApproachParams(cluster_eps=0.1, cluster_min_samples=2, node_order="tsp", area_order="tsp",
-                                delta=0.05, alpha=0.0, n_orientations=1),
+        detection=DetectionParams(max_tip_distance=0.7),
+        approach=ApproachParams(cluster_eps=0.13, cluster_min_samples=1, node_order="tsp", area_order="tsp",
+                                delta=AUTHORS_DELTA, alpha=AUTHORS_ALPHA),
         vacuum=VacuumParams(stiffness=100.0, rotational_stiffness=20.0, speed=0.02, pattern="spiral",
                             spiral_radius=0.010, spiral_turns=2.0, spiral_time=5.0, spiral_nodes="last"),
     )
@@ -91,18 +115,19 @@ def online_params(reading: str = "paper", *, fast: bool = False) -> OnlineParams
     Parameters
     ----------
     reading : {"paper", "authors"}
-        ``"paper"``: the package defaults (the paper's text); ``"authors"``: the authors' code.
+        ``"paper"``: the package defaults with the authors' alpha and delta (the paper gives
+        none); ``"authors"``: the authors' code at 4a4038c.
     fast : bool
         Fast mode (CI): heaps :data:`FAST_SPACING` apart instead of 0.1 m, as
         :func:`mavac.experiments.mavac_online.online_params`; same code paths. The authors'
-        DBSCAN radius (0.1 m, the heap spacing at paper scale) is scaled with the spacing:
-        with ``min_samples`` 2 a radius below the spacing would make every node noise.
+        DBSCAN radius (0.13 m, 1.3 heap spacings at paper scale) is scaled with the spacing so
+        that neighbouring heaps still share an area.
 
     Returns
     -------
     OnlineParams
     """
-    params = _authors_online() if check_reading(reading) == "authors" else OnlineParams()
+    params = _authors_online() if check_reading(reading) == "authors" else _paper_online()
     if not fast:
         return params
     if reading == "authors":
@@ -111,15 +136,16 @@ def online_params(reading: str = "paper", *, fast: bool = False) -> OnlineParams
     return replace(params, dust=DustParams(spacing=FAST_SPACING))
 
 
-def inspection_params(reading: str = "paper"):
+def inspection_params(reading: str = "paper", *, offline: str = "hpr"):
     """Offline (inspection) parameters of one reading.
 
-    ``"paper"`` is :class:`mavac.params.InspectionParams` as it stands. ``"authors"`` changes
-    the camera pyramid to half-angles 45 deg (camera XY plane) and 35 deg (XZ plane) cut at
-    0.7 m, HPR at an absolute radius of 10 (``script/class_fov_emulator.py``,
-    ``FovEmulator.__init__`` and ``get_visible_point_pyramid``, the one ``script/offline.py``,
-    ``Offline.send_next_valid_config`` calls), and guard candidates 0.4 m along the surface
-    normal (``script/offline.py``, ``Offline.generate_pcd_guard``, default ``dist=0.4``).
+    ``"paper"`` is :class:`mavac.params.InspectionParams` with the visibility ``offline``
+    (the paper's HPR by default, "Camera FOV"; its radius factor is ours). ``"authors"``
+    changes the camera pyramid to half-angles 45 deg (camera XY plane) and 35 deg (XZ plane)
+    cut at 0.7 m (``class_fov_emulator.py:81-83``), HPR at an absolute radius of 10
+    (``class_fov_emulator.py:105-106``, ``get_visible_point_pyramid``), and guard candidates
+    0.4 m along the surface normal (``offline.py:426``, ``generate_pcd_guard``, ``dist=0.4``),
+    all at 4a4038c; with ``offline="raycast"`` ray casting replaces its HPR.
 
     Returns
     -------
@@ -127,13 +153,15 @@ def inspection_params(reading: str = "paper"):
     """
     from ..params import InspectionParams
 
+    check_offline(offline)
     if check_reading(reading) == "paper":
-        return InspectionParams()
+        return InspectionParams().with_visibility(offline)
     from ..params import GuardParams, Visibility  # standoff, Visibility: the offline work of issue 20
 
     camera = replace(CameraParams(), theta_a=math.radians(45.0), theta_b=math.radians(35.0), L_d=0.7)
+    visibility = Visibility("hpr", radius=10.0) if offline == "hpr" else Visibility("raycast")
     return replace(InspectionParams(), camera=camera, guard=replace(GuardParams(), standoff=0.4),
-                   visibility=Visibility("hpr", radius=10.0))
+                   visibility=visibility)
 
 
 def _flat_fields(params, prefix: str = "") -> dict:

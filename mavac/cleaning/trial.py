@@ -45,7 +45,8 @@ from .clustering import areas_from_nodes
 from .detection import detect_dust, match_nodes
 from .filters import FILTERS, filter_nodes
 from .heaps import heaps_for_trial
-from .misses import CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, miss_causes, near_frustum
+from .misses import (CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, mark_blobs, miss_causes,
+                     near_frustum)
 from .motion import Motion, plan_arm_motion
 from .replay import Replay, ReplayRecorder
 from .scene import build_cell
@@ -333,7 +334,9 @@ class _Run:
         self.result.warnings.append(f"{why}: {len(np.atleast_2d(poses))} pose(s) skipped")
 
     def look(self):
-        """RGB-D image from the camera where the arm really is; marks frustum/image ground truth."""
+        """RGB-D image from the camera where the arm really is; marks frustum/image ground truth.
+        Returns rgb, depth, world_T_camera and (h, w) the heap index drawn at each pixel
+        (-1: none; scoring only)."""
         d, cell = self.params.detection, self.cell
         world_T_camera = cell.sim.world_T_link(cell.robot.camera_frame) @ mavac_T_opencv()
         shown = near_frustum(cell.dust.positions, world_T_camera, self.K, d.width, d.height, NEAR, FAR,
@@ -344,8 +347,10 @@ class _Run:
         present = np.flatnonzero(cell.dust.present)
         self.events.mark("in_frustum", present[in_frustum(cell.dust.positions[present], world_T_camera, self.K,
                                                           d.width, d.height, NEAR, FAR)])
-        self.events.mark("in_image", cell.dust.index_of_bodies(np.unique(seg), bodies))
-        return rgb, depth, world_T_camera
+        ids, inverse = np.unique(seg, return_inverse=True)
+        heap_of_id = cell.dust.index_of_bodies(ids, bodies)
+        self.events.mark("in_image", heap_of_id)
+        return rgb, depth, world_T_camera, heap_of_id[inverse].reshape(np.shape(seg))
 
     def inspect_and_clean(self, i: int, pose) -> None:
         """Algorithm 1, lines 3-16 at pose ``i`` (a row of T: spot, then guard configuration)."""
@@ -356,10 +361,11 @@ class _Run:
             return
         self.track(motion.path)
         self.result.guards += 1
-        rgb, depth, world_T_camera = self.look()
+        rgb, depth, world_T_camera, seg_heaps = self.look()
         det = detect_dust(rgb, depth, self.K, world_T_camera, self.params.detection)
         located = np.all(np.isfinite(det.nodes), axis=1)
         heap_of = match_nodes(det.nodes, self.cell.dust.positions, self.params.detection.match_radius)
+        mark_blobs(self.events, det.blobs, seg_heaps, heap_of)
         self.result.detected += int(located.sum())
         self.result.true_positives += int(np.count_nonzero(heap_of[located] >= 0))
         self.matched[heap_of[heap_of >= 0]] = True

@@ -17,11 +17,18 @@ area fixes its heap count (about area / 0.01 m^2). One dimension per test is der
 Table 2's mean heap count: the depth of three bench boxes (145.6 heaps) and the sander's
 length (156.2 heaps for sanding + milling). Table 2's counts are then met: 146 and 156 heaps.
 
+The mill is built from the paper's constraints on it (a Roland SRM-20 at its datasheet size):
+its enclosure floor is in view through the open front (no sill hides it), the enclosure stays
+too small for the tool (the paper's own failure there: "detected dust inside the box", no valid
+route), and its roof is low enough for a downward camera's guard (:data:`DOWNWARD_CAMERA_MAX_Z`).
+:class:`StandIn` holds the free dimensions (bench height, sill, the sander's shelf) that the
+sensitivity table of notebook 05 varies.
+
 Conflict with the Discussion. The Discussion gives "144 to 160 dust heaps distributed across
 surfaces ranging from 5 to 6 m^2". At 10 cm spacing 5-6 m^2 of dust-bearing surface would
 hold 500-600 heaps, so the 5-6 m^2 can only be the whole exposed surface. We follow the heap
-count; the exposed areas it leaves are 6.5 m^2 for the test bench and 8.9 m^2 for sanding +
-milling (3.1 + 5.8 m^2), above the Discussion's 6 m^2.
+count; the exposed areas it leaves are 6.5 m^2 for the test bench and 7.2 m^2 for sanding +
+milling (4.1 + 3.1 m^2), above the Discussion's 6 m^2.
 
 Dust heaps: "green dust heaps are evenly distributed at intervals of 10 cm on the surface,
 including within the concavities". :func:`dust_heaps` spreads them over every surface dust can
@@ -177,29 +184,93 @@ def _test_bench_geometry():
     return _finish(_union([box1, box2, box3, box4]))
 
 
+#: Milling machine. The paper: "a sanding machine and a milling machine in a fabrication
+#: laboratory"; "the robot detected dust inside the box. However, the path planner failed to
+#: generate a valid route due to the tool's large size". Ours: the bench CNC mill of a fab lab,
+#: the Roland monoFab SRM-20 (Roland DG, SRM-20 specifications: external dimensions 451.0 (W) x
+#: 426.6 (D) x 426.2 (H) mm; table 232.2 x 156.6 mm), its front cover open, on a bench cabinet.
+MILL_BODY_SIZE = (0.451, 0.4266, 0.4262)
+#: SRM-20 table (X x Y, m), datasheet above; 4 cm on its carriage above the enclosure floor (ours)
+MILL_TABLE_SIZE = (0.2322, 0.1566)
+MILL_TABLE_HEIGHT = 0.04
+#: casing (ours): 2 cm side walls, 3 cm base and roof, an 8 cm back (gantry and electronics)
+MILL_WALL, MILL_SLAB, MILL_BACK = 0.02, 0.03, 0.08
+#: bench cabinet under the mill (ours: the 0.75 x 0.6 m cabinet of a bench tool, the mill
+#: centred on its top)
+MILL_BENCH_SIZE = (0.75, 0.6)
+#: Highest camera the robot holds looking straight down (optical axis within 10 deg of -z)
+#: 0.85 m from its base centre, i.e. over the middle of a 0.6 m deep machine whose front is
+#: 0.545 m away (half the MiR200's 0.89 m plus the 0.10 m base clearance, OnlineParams):
+#: 1.38 m, pinocchio forward kinematics of ``ur10_mobile`` maximised with scipy SLSQP (ours,
+#: collisions ignored; tests/test_machines.py checks it). A guard sits L_d = 0.5 m along the
+#: surface normal (MAVAC, "Local exploration"; CameraParams.L_d), so the roof's guard is
+#: reachable only for a roof at most 1.38 - 0.5 = 0.88 m high.
+DOWNWARD_CAMERA_MAX_Z = 1.38
+#: bench height: the SRM-20's roof at DOWNWARD_CAMERA_MAX_Z - L_d (rounded down to 5 mm)
+MILL_BENCH_HEIGHT = 0.45
 #: Sanding machine: the paper says only "a sanding machine ... in a fabrication laboratory"
-#: with "complex structures with concavities and hard-to-reach areas", and reports no enclosed
-#: region on it (only the milling machine's box). Ours: a combination belt-and-disc sander,
-#: the usual sander of a fabrication laboratory, on a closed cabinet stand; its concavities
-#: are the overhanging disc table and the corners between belt housing, disc and stand top.
-#: SANDER_LENGTH is derived from the heap count: with the milling machine as built (0.913 m^2
-#: upward), the pair's upward area equals Table 2's mean of 156.2 sanding + milling heaps at
-#: 10 cm spacing (1.562 m^2) when the sander's is 0.649 m^2, i.e. D * L + 0.065 m^2 (stand
-#: top, plus the disc table and the disc-guard top, less the stand top under the disc) = 0.649,
-#: so L = 0.584 / 0.6 = 0.974 m.
-SANDER_LENGTH = 0.974
-#: stand depth D (ours: the milling stand's 0.6 m, a common cabinet depth)
+#: and that both machines "feature complex structures with concavities and hard-to-reach
+#: areas". Ours: a combination belt-and-disc sander, the usual sander of a fab lab, on an open
+#: shelf stand (its shelf is the sander's concavity; ``StandIn(sander_shelf="closed")`` is the
+#: closed cabinet of the previous stand-in); the overhanging disc table and the corners between
+#: belt housing, disc and stand top are its other concavities.
+#: SANDER_LENGTH is derived from the heap count: the mill as built has 0.593 m^2 upward
+#: (:func:`upward_area`), so the pair's upward area equals Table 2's mean of 156.2 sanding +
+#: milling heaps at 10 cm spacing (1.562 m^2) when the sander's is 0.969 m^2, i.e.
+#: D * L (stand top) + (L - 2 t) * (D - t) (shelf floor) + 0.065 m^2 (disc table and disc-guard
+#: top, less the stand top under the disc) = 0.969 with D = 0.6, t = 0.02:
+#: L = (0.969 - 0.065 + 0.04 * 0.58) / 1.18 = 0.786 m.
+SANDER_LENGTH = 0.786
+#: stand depth D (ours: the mill bench's 0.6 m, a common cabinet depth)
 SANDER_DEPTH = 0.6
 #: stand height (ours: puts the disc table at 0.72 m, a bench-tool working height)
 SANDER_STAND_HEIGHT = 0.6
+#: open shelf stand (ours): 2 cm sides and back, 3 cm top, its shelf floor on a 10 cm plinth
+SANDER_PANEL, SANDER_TOP, SANDER_PLINTH = 0.02, 0.03, 0.10
+#: legal ``StandIn.sander_shelf`` values
+SANDER_SHELVES = ("open", "closed")
+
+
+@dataclass(frozen=True)
+class StandIn:
+    """The free dimensions of the sanding + milling stand-in (the paper gives none of them).
+
+    Attributes
+    ----------
+    mill_bench_height : float, metres
+        Height of the bench under the mill (:data:`MILL_BENCH_HEIGHT`, from the camera's
+        downward reach); the roof is at ``mill_bench_height + 0.4262``. Range [0.1, 1.0].
+    mill_sill : float, metres
+        Height of the enclosure opening's lower edge above the enclosure floor (0: the open
+        front cover of the SRM-20, nothing in front of its floor). Range [0, 0.15].
+    sander_shelf : {"open", "closed"}
+        The sander's stand: an open shelf (default) or a closed cabinet with a toe-kick.
+    """
+
+    mill_bench_height: float = MILL_BENCH_HEIGHT
+    mill_sill: float = 0.0
+    sander_shelf: str = "open"
+
+    def __post_init__(self):
+        check_range("mill_bench_height", self.mill_bench_height, 0.1, 1.0)
+        check_range("mill_sill", self.mill_sill, 0.0, 0.15)
+        if self.sander_shelf not in SANDER_SHELVES:
+            raise ValueError(f"sander_shelf must be one of {SANDER_SHELVES}, got {self.sander_shelf!r}")
+
+
+def _sander_stand(shelf: str):
+    """The sander's stand: an open shelf, or a closed cabinet with a 6 x 10 cm toe-kick."""
+    L, D, H = SANDER_LENGTH, SANDER_DEPTH, SANDER_STAND_HEIGHT
+    if shelf == "closed":
+        return _difference(_box([0.0, 0.0, 0.0], [L, D, H]), [_box([-0.1, -0.1, -0.1], [L + 0.1, 0.06, 0.1])])
+    t = SANDER_PANEL
+    return _difference(_box([0.0, 0.0, 0.0], [L, D, H]),
+                       [_box([t, -0.1, SANDER_PLINTH], [L - t, D - t, H - SANDER_TOP])])
 
 
 @lru_cache(maxsize=None)
-def _sanding_machine_geometry():
+def _sanding_machine_geometry(shelf: str = "open"):
     L, D, H = SANDER_LENGTH, SANDER_DEPTH, SANDER_STAND_HEIGHT
-    # closed cabinet stand with a 6 cm x 10 cm toe-kick (ours: as the milling stand)
-    stand = _difference(_box([0.0, 0.0, 0.0], [L, D, H]),
-                        [_box([-0.1, -0.1, -0.1], [L + 0.1, 0.06, 0.1])])
     parts = [
         # belt housing along x at the back, 0.2 m tall, 23 cm deep (ours: a 150 mm belt
         # with its frame), leaving 0.25 m of stand top at the right for the disc
@@ -213,7 +284,7 @@ def _sanding_machine_geometry():
         # table bracket down to the stand (ours: holds the table, keeps one body)
         _box([L - 0.17, D - 0.34, H - 0.01], [L - 0.13, D - 0.28, H + 0.11]),
     ]
-    return _finish(_union([stand, *parts]))
+    return _finish(_union([_sander_stand(shelf), *parts]))
 
 
 def _cylinder_y(radius: float, x: float, y0: float, y1: float, z: float,
@@ -225,34 +296,40 @@ def _cylinder_y(radius: float, x: float, y0: float, y1: float, z: float,
     return cyl
 
 
+def mill_heights(stand_in: StandIn | None = None) -> dict:
+    """Heights (m) of the mill's dust-bearing levels: ``roof`` (top of the SRM-20),
+    ``enclosure_floor`` (inside the box) and ``table`` (its machine table)."""
+    s = StandIn() if stand_in is None else check_instance("stand_in", stand_in, StandIn)
+    floor = s.mill_bench_height + MILL_SLAB
+    return dict(roof=s.mill_bench_height + MILL_BODY_SIZE[2], enclosure_floor=floor, table=floor + MILL_TABLE_HEIGHT)
+
+
 @lru_cache(maxsize=None)
-def _milling_machine_geometry():
-    # The paper: "the robot detected dust inside the box" of the milling machine, "however,
-    # the path planner failed to generate a valid route due to the tool's large size". Ours:
-    # an enclosed bench CNC mill (fabrication-laboratory size) on a cabinet stand; the
-    # enclosure's front is open (door open) so the camera sees in; every size below is ours.
-    # stand 0.75 x 0.6 x 0.65 m with a 6 cm x 10 cm toe-kick (ours: a bench-mill cabinet)
-    stand = _difference(_box([0.0, 0.0, 0.0], [0.75, 0.6, 0.65]),
-                        [_box([-0.1, -0.1, -0.1], [0.85, 0.06, 0.1])])
-    # enclosure 0.5 m tall, 3 cm walls; door opening 0.55 x 0.3 m (ours)
-    shell = _difference(_box([0.0, 0.0, 0.65], [0.75, 0.6, 1.15]),
-                        [_box([0.03, 0.03, 0.68], [0.72, 0.57, 1.12]),
-                         _box([0.1, -0.1, 0.75], [0.65, 0.1, 1.05])])
-    # machine table 0.45 x 0.24 x 0.1 m with three 16 mm T-slots (ours)
-    table = _difference(_box([0.15, 0.12, 0.68], [0.6, 0.36, 0.78]),
-                        [_box([0.1, y, 0.76], [0.65, y + 0.016, 0.85])
-                         for y in (0.16, 0.23, 0.3)])
+def _milling_machine_geometry(bench_height: float = MILL_BENCH_HEIGHT, sill: float = 0.0):
+    bw, bd = MILL_BENCH_SIZE
+    w, d, h = MILL_BODY_SIZE
+    x0, y0 = (bw - w) / 2, (bd - d) / 2  # the mill centred on the bench (ours)
+    x1, y1, top = x0 + w, y0 + d, bench_height + h
+    floor = bench_height + MILL_SLAB
+    # bench cabinet with a 6 cm x 10 cm toe-kick (ours: as the sander's closed cabinet)
+    bench = _difference(_box([0.0, 0.0, 0.0], [bw, bd, bench_height]),
+                        [_box([-0.1, -0.1, -0.1], [bw + 0.1, 0.06, 0.1])])
+    # the SRM-20's casing, front cover open: the opening spans the inside from `sill` above
+    # the enclosure floor to the roof (sill 0: a camera outside sees the floor)
+    inner = _box([x0 + MILL_WALL, y0 - 0.1, floor + sill], [x1 - MILL_WALL, y1 - MILL_BACK, top - MILL_SLAB])
+    body = _difference(_box([x0, y0, bench_height - 0.01], [x1, y1, top]),
+                       [inner, _box([x0 + MILL_WALL, y0 + 0.01, floor], [x1 - MILL_WALL, y1 - MILL_BACK, top - MILL_SLAB])])
+    tw, td = MILL_TABLE_SIZE
+    cx, cy = (x0 + x1) / 2, (y0 + y1 - MILL_BACK) / 2
     inside = [
-        table,
-        _box([0.3, 0.43, 0.68], [0.45, 0.57, 1.12]),  # column on the back wall (ours)
-        _box([0.32, 0.24, 0.93], [0.43, 0.43, 1.05]),  # spindle head, overhangs the table (ours)
-        _cylinder(0.025, 0.83, 0.93, 0.375, 0.31),  # 5 cm spindle (ours)
+        # machine table on its carriage (SRM-20 table size; carriage height ours)
+        _box([cx - tw / 2, cy - td / 2, floor - 0.01], [cx + tw / 2, cy + td / 2, floor + MILL_TABLE_HEIGHT]),
+        # spindle head hanging from the gantry under the roof, 10 x 10 x 15 cm (ours)
+        _box([cx - 0.05, cy - 0.05, top - MILL_SLAB - 0.15], [cx + 0.05, cy + 0.05, top - MILL_SLAB + 0.01]),
+        # 4 cm spindle, 8 cm above the table (ours: the SRM-20's 60.5 mm Z travel above its table)
+        _cylinder(0.02, floor + MILL_TABLE_HEIGHT + 0.08, top - MILL_SLAB - 0.14, cx, cy),
     ]
-    outside = [
-        _box([0.75, 0.3, 0.0], [0.93, 0.6, 0.3]),  # coolant tank (ours)
-        _box([0.75, 0.05, 0.8], [0.85, 0.25, 1.05]),  # control pendant, cantilevered (ours)
-    ]
-    return _finish(_union([stand, shell, *inside, *outside]))
+    return _finish(_union([bench, body, *inside]))
 
 
 #: Gap (m) between the sanding and the milling machine in the combined scene. The paper
@@ -262,9 +339,9 @@ SANDING_MILLING_GAP = 1.0
 
 
 @lru_cache(maxsize=None)
-def _sanding_milling_geometry():
-    sander = trimesh.Trimesh(*_sanding_machine_geometry(), process=False)
-    mill = trimesh.Trimesh(*_milling_machine_geometry(), process=False)
+def _sanding_milling_geometry(stand_in: StandIn = StandIn()):
+    sander = trimesh.Trimesh(*_sanding_machine_geometry(stand_in.sander_shelf), process=False)
+    mill = trimesh.Trimesh(*_milling_machine_geometry(stand_in.mill_bench_height, stand_in.mill_sill), process=False)
     sander, mill = sander.copy(), mill.copy()
     mill.apply_translation([sander.bounds[1, 0] + SANDING_MILLING_GAP - mill.bounds[0, 0],
                             sander.bounds[0, 1] - mill.bounds[0, 1], 0.0])
@@ -272,19 +349,19 @@ def _sanding_milling_geometry():
 
 
 _GEOMETRY = {
-    "test_bench": _test_bench_geometry,
-    "sanding_machine": _sanding_machine_geometry,
-    "milling_machine": _milling_machine_geometry,
+    "test_bench": lambda s: _test_bench_geometry(),
+    "sanding_machine": lambda s: _sanding_machine_geometry(s.sander_shelf),
+    "milling_machine": lambda s: _milling_machine_geometry(s.mill_bench_height, s.mill_sill),
     "sanding_milling": _sanding_milling_geometry,
 }
 _NOTES = {
     "test_bench": "MAVAC test bench 2 x 1 x 1 m: four adjacent 0.5 m boxes (plain box, open-top "
                   "pocket, slab overhanging a step, tower split by a 0.1 m slot); upward area "
                   "from Table 2's mean heap count",
-    "sanding_machine": "stand-in belt-and-disc sander on a closed cabinet stand: belt housing, "
-                       "disc with a work table over the stand top, toe-kick",
-    "milling_machine": "stand-in enclosed CNC mill on a stand: open-front enclosure with table "
-                       "(T-slots), column and spindle head inside, coolant tank, pendant",
+    "sanding_machine": "stand-in belt-and-disc sander on an open shelf stand (or a closed cabinet): "
+                       "belt housing, disc with a work table over the stand top",
+    "milling_machine": "stand-in Roland SRM-20 bench CNC mill (datasheet size), front cover open, "
+                       "on a bench cabinet: table, spindle head and spindle inside",
     "sanding_milling": "MAVAC Table 2's one test of both machines: sander and mill side by side, "
                        f"{SANDING_MILLING_GAP} m apart, fronts aligned; upward area from Table "
                        "2's mean heap count",
@@ -306,10 +383,12 @@ def machine_from_mesh(mesh: trimesh.Trimesh, *, name: str = "custom", notes: str
     return Machine(name, copy, footprint_from_mesh(copy), notes, file_offset=offset)
 
 
-def _build(name: str) -> Machine:
-    vertices, faces = _GEOMETRY[name]()
+def _build(name: str, stand_in: StandIn | None = None) -> Machine:
+    stand_in = StandIn() if stand_in is None else check_instance("stand_in", stand_in, StandIn)
+    vertices, faces = _GEOMETRY[name](stand_in)
     mesh = trimesh.Trimesh(vertices.copy(), faces.copy(), process=False)
-    return Machine(name, mesh, footprint_from_mesh(mesh), _NOTES[name])
+    notes = _NOTES[name] + ("" if stand_in == StandIn() or name == "test_bench" else f"; {stand_in}")
+    return Machine(name, mesh, footprint_from_mesh(mesh), notes)
 
 
 def test_bench() -> Machine:
@@ -321,31 +400,40 @@ def test_bench() -> Machine:
 test_bench.__test__ = False  # not a pytest test despite the name
 
 
-def sanding_machine() -> Machine:
-    """Stand-in for MAVAC's sanding machine (a belt-and-disc sander on a cabinet stand)."""
-    return _build("sanding_machine")
+def sanding_machine(*, stand_in: StandIn | None = None) -> Machine:
+    """Stand-in for MAVAC's sanding machine (a belt-and-disc sander on a shelf stand)."""
+    return _build("sanding_machine", stand_in)
 
 
-def milling_machine() -> Machine:
-    """Stand-in for MAVAC's milling machine (an enclosed CNC mill on a stand)."""
-    return _build("milling_machine")
+def milling_machine(*, stand_in: StandIn | None = None) -> Machine:
+    """Stand-in for MAVAC's milling machine (a Roland SRM-20, front cover open, on a bench)."""
+    return _build("milling_machine", stand_in)
 
 
-def sanding_milling() -> Machine:
+def sanding_milling(*, stand_in: StandIn | None = None) -> Machine:
     """MAVAC Table 2's sanding + milling test: both stand-ins side by side, one mesh of two
     bodies (:data:`SANDING_MILLING_GAP` apart)."""
-    return _build("sanding_milling")
+    return _build("sanding_milling", stand_in)
 
 
-def load_machine(name: str) -> Machine:
+def load_machine(name: str, *, stand_in: StandIn | None = None) -> Machine:
     """The machine or scene called ``name``, one of :data:`LOADABLE_NAMES`.
 
     ``"sanding_milling"`` is MAVAC Table 2's combined test: the sanding and the milling
-    machine side by side in one mesh of two bodies.
+    machine side by side in one mesh of two bodies. ``stand_in`` sets the free dimensions of
+    the sander and the mill (:class:`StandIn`; default the nominal ones); the test bench has none.
     """
     if name not in _GEOMETRY:
         raise ValueError(f"name must be one of {LOADABLE_NAMES}, got {name!r}")
-    return _build(name)
+    return _build(name, stand_in)
+
+
+def upward_area(machine: Machine, *, min_normal_z: float = DUST_MIN_NORMAL_Z) -> float:
+    """Area (m^2) of the faces dust rests on (normal within ``arccos(min_normal_z)`` of
+    vertical): at 10 cm spacing, :func:`dust_heaps` puts about ``100 * area`` heaps there."""
+    mesh = check_instance("machine", machine, Machine).mesh
+    check_range("min_normal_z", min_normal_z, 0.0, 1.0)
+    return float(np.asarray(mesh.area_faces)[np.asarray(mesh.face_normals)[:, 2] >= min_normal_z].sum())
 
 
 def on_floor(z, normal_z) -> np.ndarray:
