@@ -441,8 +441,8 @@ class CertifyParams(CheckedFields):
     # hundred candidates, seconds on thousands); None for no limit.
     milp_nodes: int | None = ranged(10_000, ge=1)
     # Ours: a cover is optimal when no cover is cheaper by more than this fraction of its cost
-    # (the incumbent enters HiGHS as the cutoff ``c.x <= (1 - rel_tol) T``; HiGHS' own feasibility
-    # tolerance is 1e-7 absolute).
+    # (an integer program's optimum above ``(1 - rel_tol) T`` proves the incumbent ``T``; HiGHS'
+    # own feasibility tolerance is 1e-7 absolute).
     rel_tol: float = ranged(1e-6, gt=0.0, lt=0.01)
 
 

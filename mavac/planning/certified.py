@@ -19,9 +19,10 @@ planning makes most instances easy to prove:
    setups that carry it; HiGHS on those setups alone improves the incumbent (the greedy cover
    is often far from the optimum: 60 % above it on the sine's Table II instance);
 5. reduced-cost fixing drops every setup whose Lagrangian bound already reaches the incumbent,
-   the rest is reduced again, and HiGHS solves it with the incumbent as an objective cutoff
-   (``c.x <= (1 - rel_tol) T``; scipy's ``milp`` takes no start point): infeasible proves the
-   incumbent, a solution is the optimum.
+   the rest is reduced again, and HiGHS solves it (presolve off, no objective cutoff row: on the
+   Table II bowl, 181 setups, the cutoff row ``c.x <= (1 - rel_tol) T`` and HiGHS' presolve
+   took 9.4 CPU s where the plain program takes 3.8 s); an optimum no cheaper than
+   ``(1 - rel_tol) T`` proves the incumbent, a cheaper one is the optimum.
 
 Budgets count nodes, never seconds. Every result reports its status and a proven lower bound.
 """
@@ -184,7 +185,7 @@ def _improve(found: _Search, cover, costs, rows: np.ndarray, params: CertifyPara
     sub = reduce_instance(cover[rows], costs[rows], check=False)
     if len(sub.uncoverable):  # no cover from these rows at all
         return "optimal", found.cost
-    chosen, cost, status, bound, nodes = _milp_with_cutoff(sub, found.cost, params)
+    chosen, cost, status, bound, nodes = _milp_below(sub, found.cost, params)
     found.milp_nodes += nodes
     if chosen is not None and sub.forced_cost + cost < found.cost:
         found.rows = rows[sub.lift(np.array(chosen, dtype=np.int64))].tolist()
@@ -306,8 +307,8 @@ class _Tree:
         return (best, best_cost), nodes + used
 
 
-def _milp_with_cutoff(red: ReducedInstance, incumbent: float, params: CertifyParams):
-    """HiGHS on a reduced instance, covers cheaper than the incumbent only, within the node budget.
+def _milp_below(red: ReducedInstance, incumbent: float, params: CertifyParams):
+    """HiGHS on a reduced instance within the node budget; keeps only a cover cheaper than the incumbent.
 
     Parameters
     ----------
@@ -325,10 +326,9 @@ def _milp_with_cutoff(red: ReducedInstance, incumbent: float, params: CertifyPar
     cutoff = incumbent * (1.0 - params.rel_tol) - red.forced_cost
     if n == 0:
         return ([], 0.0, "optimal", 0.0, 0) if cutoff >= 0 else (None, 0.0, "optimal", 0.0, 0)
-    rows = csr_array(np.vstack([red.cover.T.astype(float), red.costs[None, :]]))
-    lb = np.r_[np.ones(n), -np.inf]
-    ub = np.r_[np.full(n, np.inf), cutoff]
-    options = {"mip_rel_gap": 0.0}
+    rows = csr_array(red.cover.T.astype(float))
+    lb, ub = np.ones(n), np.full(n, np.inf)
+    options = {"mip_rel_gap": 0.0, "presolve": False}
     if params.milp_nodes is not None:
         options["node_limit"] = int(params.milp_nodes)
     res = milp(c=red.costs, constraints=LinearConstraint(rows, lb=lb, ub=ub), integrality=np.ones(m),
@@ -339,6 +339,8 @@ def _milp_with_cutoff(red: ReducedInstance, incumbent: float, params: CertifyPar
     chosen = np.flatnonzero(res.x > 0.5).tolist() if res.x is not None else None
     cost = math.fsum(red.costs[chosen].tolist()) if chosen is not None else math.inf
     if res.status == 0:
+        if cost > cutoff:  # the optimum over these rows is no cheaper than the incumbent
+            return None, 0.0, "optimal", incumbent - red.forced_cost, nodes
         return chosen, cost, "optimal", cost, nodes
     bound = getattr(res, "mip_dual_bound", None)
     bound = float(bound) if bound is not None and np.isfinite(bound) else 0.0
