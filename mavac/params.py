@@ -258,6 +258,11 @@ class SetupSpaceParams(CheckedFields):
             raise ValueError(f"y_min must be <= y_max, got {self.y_min} > {self.y_max}")
         check_range("alpha_max", self.alpha_max, self.alpha_min, self.alpha_min + 2.0 * math.pi)
 
+    def at_resolution(self, resolution) -> SetupSpaceParams:
+        """The same region on another grid: ``resolution`` is (x m, y m, alpha rad), each > 0."""
+        res_x, res_y, res_alpha = (float(r) for r in resolution)
+        return replace(self, res_x=res_x, res_y=res_y, res_alpha=res_alpha)
+
 
 @dataclass(frozen=True)
 class ReachParams(CheckedFields):

@@ -169,3 +169,14 @@ def test_stain_facing_the_table_gets_no_plan_and_the_plan_says_why(collision):
     assert plan.status == "no_solution" and len(plan.setups) == 0
     assert set(plan.uncoverable_causes) == {"below_support"}
     assert any("table" in w for w in plan.warnings)
+
+
+def test_at_resolution_keeps_the_region_and_changes_the_grid():
+    from mavac.params import SetupSpaceParams
+
+    base = SetupSpaceParams()
+    coarse = base.at_resolution((0.1, 0.2, 0.5))
+    assert (coarse.res_x, coarse.res_y, coarse.res_alpha) == (0.1, 0.2, 0.5)
+    assert (coarse.x_min, coarse.x_max, coarse.y_min, coarse.y_max) == (base.x_min, base.x_max, base.y_min, base.y_max)
+    with pytest.raises(ValueError, match="res_x"):
+        base.at_resolution((0.0, 0.1, 0.1))

@@ -71,7 +71,7 @@ def wide_setup_space(robot, patch_vertices, *, base: SetupSpaceParams | None = N
     r = part_radius(patch_vertices) + reach
     rx, ry = math.ceil(r / res[0]) * res[0], math.ceil(r / res[1]) * res[1]
     return dataclasses.replace(base, x_min=0.0, x_max=rx, y_min=0.0, y_max=2.0 * ry, origin_x=0.0,
-                               origin_y=-ry, res_x=res[0], res_y=res[1], res_alpha=res[2])
+                               origin_y=-ry).at_resolution(res)
 
 
 def square_origins(wide: SetupSpaceParams, size: float, step: float) -> np.ndarray:
