@@ -152,13 +152,13 @@ class ScrubLog:
         f_on = self.normal_force[on]
         steps = (self.other_count > 0).sum(axis=0)
         peak = self.other.max(axis=0, initial=0.0)
+        error_all, rms_all = _force_error(f_all, self.commanded_force[cmd], f_n)
+        error_on, rms_on = _force_error(f_on, self.commanded_force[on], f_n)
         return dict(commanded_steps=int(cmd.sum()), contact_steps=int(on.sum()), duty=float(on.sum() / cmd.sum()),
                     contact_s=self.contact_s, f_n_n=f_n, mean_force_all_n=float(f_all.mean()),
-                    force_error_all=_force_error(f_all, self.commanded_force[cmd], f_n)[0],
-                    force_rms_all=_force_error(f_all, self.commanded_force[cmd], f_n)[1],
+                    force_error_all=error_all, force_rms_all=rms_all,
                     mean_normal_force_n=self.mean_contact_force,
-                    force_error_contact=_force_error(f_on, self.commanded_force[on], f_n)[0],
-                    force_rms_contact=_force_error(f_on, self.commanded_force[on], f_n)[1],
+                    force_error_contact=error_on, force_rms_contact=rms_on,
                     integral_saturated_steps=int(self.saturated[cmd].sum()),
                     integral_saturated_share=float(self.saturated[cmd].mean()),
                     nonpad_part_steps=int(steps[0]), nonpad_part_peak_n=float(peak[0]),
