@@ -1,9 +1,10 @@
 import numpy as np
+import pinocchio as pin
 import pytest
 import trimesh
 
 from mavac.robots import kinematics as K
-from mavac.robots.collision import CollisionChecker
+from mavac.robots.collision import CollisionChecker, pair_cost_key
 from mavac.robots.models import puma560, se2_to_matrix, ur10_mobile
 
 
@@ -127,3 +128,51 @@ def test_ignored_pairs_are_not_tested_and_the_margin_survives(ur10, box_at_tool)
     assert padded.in_collision(ur10.q_home)
     with pytest.raises(ValueError, match="pairs"):
         checker.ignore_pairs([("upper_arm_link_0", "no_such_link")])
+
+
+def _all_pairs_reference(checker, q) -> bool:
+    """Every pair of the checker tested in one pinocchio call, none cached or skipped."""
+    gm = checker.geometry_model
+    gdata = pin.GeometryData(gm)
+    for k in range(len(gm.collisionPairs)):
+        gdata.collisionRequests[k].security_margin = checker._gdata.collisionRequests[k].security_margin
+    return pin.computeCollisions(checker.robot.model, checker.robot.model.createData(), gm, gdata, q, False)
+
+
+def test_ordered_and_cached_pairs_answer_like_all_pairs(ur10):
+    """Base-fixed pairs cached per base pose and the cheapest-first order change no answer."""
+    tip = K.fk(ur10, ur10.q_home)[:3, 3]
+    box = trimesh.creation.box((0.5, 0.5, 0.5))
+    box.apply_translation(tip + [0.2, 0.0, -0.3])
+    checker = CollisionChecker(ur10, box, margin=0.01, floor=True)
+    qs = np.random.default_rng(1).uniform(ur10.q_lower, ur10.q_upper, (200, ur10.nq))
+    n_hits = []
+    for world_T_base in (np.eye(4), se2_to_matrix(0.6, 0.0, 0.0), se2_to_matrix(-4.0, 1.0, 0.5)):
+        checker.set_base(world_T_base)
+        ref = np.array([_all_pairs_reference(checker, q) for q in qs])
+        n_hits.append(int(ref.sum()))
+        assert checker.in_collision(qs).tolist() == ref.tolist()
+        assert [not checker.is_free(q) for q in qs] == ref.tolist()
+    assert n_hits[1] == len(qs) and 0 < n_hits[0] < len(qs) and 0 < n_hits[2] < len(qs)  # base pair hit at [1]
+
+
+def test_base_fixed_pair_cache_follows_set_base_and_ignore_pairs(ur10):
+    box = trimesh.creation.box((0.4, 0.4, 0.2))
+    box.apply_translation([0.3, 0.0, 0.1])  # overlaps the platform at the origin
+    checker = CollisionChecker(ur10, box)
+    assert checker.in_collision(ur10.q_home)
+    assert ("mir200_base", "obstacle") in checker.colliding_pairs(ur10.q_home)
+    checker.set_base(se2_to_matrix(-5.0, 0.0, 0.0))
+    assert checker.is_free(ur10.q_home) and checker.colliding_pairs(ur10.q_home) == []
+    checker.set_base(np.eye(4))
+    assert not checker.is_free(ur10.q_home)
+    checker.ignore_pairs([("mir200_base", "obstacle"), ("base_link_0", "obstacle")])
+    assert checker.is_free(ur10.q_home)
+
+
+def test_pairs_are_tested_cheapest_first(ur10, box_at_tool):
+    checker = CollisionChecker(ur10, box_at_tool, floor=True)
+    objs = checker.geometry_model.geometryObjects
+    keys = [pair_cost_key(objs[cp.first], objs[cp.second]) for cp in checker.geometry_model.collisionPairs]
+    assert keys == sorted(keys)
+    assert keys[0][0] == 0 and keys[-1][0] == 2  # primitive pairs first, mesh against mesh last
