@@ -1,3 +1,4 @@
+import coal
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -130,9 +131,18 @@ def test_ignored_pairs_are_not_tested_and_the_margin_survives(ur10, box_at_tool)
         checker.ignore_pairs([("upper_arm_link_0", "no_such_link")])
 
 
-def _all_pairs_reference(checker, q) -> bool:
-    """Every pair of the checker tested in one pinocchio call, none cached or skipped."""
-    gm = checker.geometry_model
+def _all_pairs_reference(checker, q, obstacle) -> bool:
+    """Every pair of the checker tested in one pinocchio call, none cached or skipped, on the
+    meshes as pinocchio loads them (OBBRSS hierarchies) and an OBBRSS obstacle."""
+    gm = checker.geometry_model.copy()
+    for g, original in zip(gm.geometryObjects, checker.robot.collision_model.geometryObjects):
+        g.geometry = original.geometry
+    bvh = coal.BVHModelOBBRSS()
+    bvh.beginModel(len(obstacle.faces), len(obstacle.vertices))
+    bvh.addVertices(np.asarray(obstacle.vertices, dtype=float))
+    bvh.addTriangles(np.asarray(obstacle.faces, dtype=np.int64))
+    bvh.endModel()
+    gm.geometryObjects[gm.getGeometryId("obstacle")].geometry = bvh
     gdata = pin.GeometryData(gm)
     for k in range(len(gm.collisionPairs)):
         gdata.collisionRequests[k].security_margin = checker._gdata.collisionRequests[k].security_margin
@@ -140,7 +150,8 @@ def _all_pairs_reference(checker, q) -> bool:
 
 
 def test_ordered_and_cached_pairs_answer_like_all_pairs(ur10):
-    """Base-fixed pairs cached per base pose and the cheapest-first order change no answer."""
+    """Base-fixed pairs cached per base pose, the cheapest-first order and the OBB hierarchies
+    change no answer."""
     tip = K.fk(ur10, ur10.q_home)[:3, 3]
     box = trimesh.creation.box((0.5, 0.5, 0.5))
     box.apply_translation(tip + [0.2, 0.0, -0.3])
@@ -149,7 +160,7 @@ def test_ordered_and_cached_pairs_answer_like_all_pairs(ur10):
     n_hits = []
     for world_T_base in (np.eye(4), se2_to_matrix(0.6, 0.0, 0.0), se2_to_matrix(-4.0, 1.0, 0.5)):
         checker.set_base(world_T_base)
-        ref = np.array([_all_pairs_reference(checker, q) for q in qs])
+        ref = np.array([_all_pairs_reference(checker, q, box) for q in qs])
         n_hits.append(int(ref.sum()))
         assert checker.in_collision(qs).tolist() == ref.tolist()
         assert [not checker.is_free(q) for q in qs] == ref.tolist()
@@ -176,3 +187,10 @@ def test_pairs_are_tested_cheapest_first(ur10, box_at_tool):
     keys = [pair_cost_key(objs[cp.first], objs[cp.second]) for cp in checker.geometry_model.collisionPairs]
     assert keys == sorted(keys)
     assert keys[0][0] == 0 and keys[-1][0] == 2  # primitive pairs first, mesh against mesh last
+
+
+def test_meshes_are_tested_as_obb_hierarchies_and_the_robot_is_untouched(ur10, box_at_tool):
+    checker = CollisionChecker(ur10, box_at_tool)
+    kinds = {type(g.geometry).__name__ for g in checker.geometry_model.geometryObjects}
+    assert "BVHModelOBB" in kinds and "BVHModelOBBRSS" not in kinds
+    assert any(isinstance(g.geometry, coal.BVHModelOBBRSS) for g in ur10.collision_model.geometryObjects)
