@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mavac.planning.dominance import nondominated, pack_rows
+from mavac.planning.dominance import first_of_each_row, nondominated, pack_rows
 
 
 def nondominated_brute(cover):
@@ -50,6 +50,19 @@ def test_nested_random_families(seed):
 def test_duplicates_keep_lowest_index_and_empty_rows_go():
     cover = np.array([[0, 0, 0], [1, 1, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1]], bool)
     np.testing.assert_array_equal(nondominated(cover), [1, 4])
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 40), st.integers(1, 4))
+def test_first_of_each_row_is_the_index_np_unique_returns(seed, m, words):
+    """Rows drawn from a few patterns, so most repeat; the full range of uint64 values."""
+    rng = np.random.default_rng(seed)
+    patterns = rng.integers(0, 2**64, (5, words), dtype=np.uint64, endpoint=False)
+    rows = patterns[rng.integers(0, 5, m)]
+    _, expected = np.unique(rows, axis=0, return_index=True)
+    first = first_of_each_row(rows)
+    assert first.dtype == np.int64
+    np.testing.assert_array_equal(np.sort(first), np.sort(expected))
 
 
 def test_no_setups_and_no_patches():

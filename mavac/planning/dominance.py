@@ -71,6 +71,24 @@ def dominated_by_any(cand: np.ndarray, sup: np.ndarray) -> np.ndarray:
     return out
 
 
+def first_of_each_row(words: np.ndarray) -> np.ndarray:
+    """Lowest index of each distinct row of ``words`` (m, w), in lexicographic order of the rows.
+
+    The same indices as ``np.unique(words, axis=0, return_index=True)`` (in another order), by a
+    stable lexsort over the columns: ``np.unique`` sorts the rows as opaque bytes, 15-30 times
+    slower on the covers of notebook 07.
+
+    Returns
+    -------
+    (k,) int64
+    """
+    if len(words) == 0:
+        return np.zeros(0, dtype=np.int64)
+    order = np.lexsort(words.T[::-1])  # stable: equal rows keep their index order
+    ranked = words[order]
+    return order[np.r_[True, np.any(ranked[1:] != ranked[:-1], axis=1)]]
+
+
 def nondominated(cover) -> np.ndarray:
     """Indices of the non-dominated, non-empty setups.
 
@@ -98,8 +116,7 @@ def nondominated(cover) -> np.ndarray:
     if m == 0:
         return np.zeros(0, dtype=np.int64)
     counts = np.bitwise_count(words).sum(axis=1, dtype=np.int64)
-    # One representative (lowest index) per distinct non-empty patch set.
-    _, first = np.unique(words, axis=0, return_index=True)
+    first = first_of_each_row(words)
     first = first[counts[first] > 0]
     # Decreasing count; a proper superset always has a strictly larger count.
     order = first[np.lexsort((first, -counts[first]))]
