@@ -110,3 +110,42 @@ def test_exhaustion_diagnosis_equals_the_seed_by_seed_descent():
                 kept[name] += bool(reach(end[None])[0][missing][b.cover[j, missing]].all())
         assert got["kept_after_conservative"] == kept["conservative"]
         assert got["kept_after_absolute"] == kept.get("absolute")
+
+
+class _AnalyticBaseline(K.Baseline):
+    """A baseline whose reach test is a formula (a disc of reach around (0.5 m, 0.5 m) over
+    patch points of a 1 m x 0.6 m part), so hierarchical levels off its grid have answers."""
+
+    def reach(self, reach_params):
+        from mavac.setups.reach import lookup_reach
+
+        return lookup_reach(self.setups, self.cover, fallback=disc_reach)
+
+
+def disc_reach(setups):
+    pts = np.random.default_rng(0).uniform(-0.5, 0.5, (30, 2)) * [1.0, 0.6]
+    c, s = np.cos(setups[:, 2:]), np.sin(setups[:, 2:])
+    wx = setups[:, :1] + c * pts[:, 0] - s * pts[:, 1]
+    wy = setups[:, 1:2] + s * pts[:, 0] + c * pts[:, 1]
+    return (wx - 0.5) ** 2 + (wy - 0.5) ** 2 < 0.3**2
+
+
+def test_table3_rows_are_the_runs_of_each_variant_alone():
+    """Table III's variants share one reach test per object (SharedReach): each row is still
+    the run of hierarchical_sampling with its own reach test, n_rfc included."""
+    from mavac.setups.reach import CountingReach
+    from mavac.setups.sampling import VARIANTS, hierarchical_sampling
+
+    space = SetupSpaceParams(res_x=0.25, res_y=0.25, res_alpha=math.radians(60))
+    sampling = dataclasses.replace(SamplingParams(), gd_step_x=0.25, gd_step_y=0.25,
+                                   gd_step_alpha=math.radians(60), max_levels=5)
+    setups = uniform_setups(space)
+    b = _AnalyticBaseline("disc", space, setups, disc_reach(setups), np.ones(30), np.ones(30, dtype=int), 0)
+    got = K.table3({"disc": b}, ReachParams(), sampling)
+    assert list(got.variant) == list(VARIANTS)
+    for row in got.itertuples():
+        res = hierarchical_sampling(CountingReach(b.reach(None)), space, sampling, variant=row.variant,
+                                    target=b.coverable)
+        assert (row.setups, row.level, row.n_rfc, row.covers_target) == (
+            K.min_cover_size(res.nondominated_cover), res.level, res.n_rfc, res.covers_target)
+    assert got.level.max() >= 4  # levels off the 0.25 m x 60 deg grid were asked (0.125 m, 30 deg)

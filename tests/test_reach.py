@@ -121,6 +121,31 @@ def test_counting_reach_counts_one_call_per_new_setup():
     np.testing.assert_array_equal(a[::-1], b)
 
 
+def test_shared_reach_asks_each_exact_setup_once_and_answers_like_the_test_alone():
+    v, n = bowl_sample()
+    live = R.PartReach(robot(), R.reach_targets(v, n), SPACE, params=PARAMS)
+    asked = []
+
+    def recording(setups):
+        asked.extend(map(tuple, setups))
+        return live(setups)
+
+    shared = R.SharedReach(recording)
+    s = uniform_setups(SPACE, (0.25, 0.25, np.radians(60)))
+    first = shared(s[:40])
+    again = shared(np.concatenate([s[30:60], s[30:35]]))  # 10 known, 20 new, 5 repeated in the call
+    assert len(asked) == 60 and len(set(asked)) == 60
+    near = s[:3].copy()
+    near[:, 0] = np.nextafter(near[:, 0], 1.0)  # same setup_keys, other floats: asked, not remembered
+    shared(near)
+    assert len(asked) == 63
+    alone = np.concatenate([live(row[None]) for row in s[:60]])
+    np.testing.assert_array_equal(first, alone[:40])
+    np.testing.assert_array_equal(again, np.concatenate([alone[30:60], alone[30:35]]))
+    assert first.any() and not first.all()
+    assert shared(np.zeros((0, 3))).shape == (0, len(v))
+
+
 def test_collision_option_only_removes_patches():
     v, n = bowl_sample()
     part = load_part("concave_bowl")

@@ -518,6 +518,42 @@ class CountingReach:
         return len(next(iter(self._memo.values()))) if self._memo else 0
 
 
+class SharedReach:
+    """A reach function that remembers its answers by the exact floats of each setup.
+
+    Several runs over one part (Table III's seven variants) ask the reach test for many of the
+    same setups: wrap the test once in this and give each run its own :class:`CountingReach`
+    over it, so each run still counts its own n_rfc. The key is the setup's float bits, not
+    :func:`setup_keys`: a setup the test was never asked for (one that rounds to the same key)
+    is never answered from memory. Every row of the answer depends on that row's setup alone
+    (the reach test is evaluated setup by setup, batched), so a run gets what it would get alone.
+
+    Parameters
+    ----------
+    reach_fn : callable
+        ``reach_fn(setups (k, 3)) -> (k, n) bool``.
+    """
+
+    def __init__(self, reach_fn: Callable[[np.ndarray], np.ndarray]):
+        self.reach_fn = reach_fn
+        self._memo: dict[bytes, np.ndarray] = {}
+
+    def __call__(self, setups) -> np.ndarray:
+        setups = np.ascontiguousarray(check_points("setups", setups, 3))
+        if len(setups) == 0:
+            return np.asarray(self.reach_fn(setups), dtype=bool)
+        keys = [row.tobytes() for row in setups]
+        missing: dict[bytes, int] = {}
+        for i, key in enumerate(keys):
+            if key not in self._memo and key not in missing:
+                missing[key] = i
+        if missing:
+            rows = np.fromiter(missing.values(), dtype=np.int64, count=len(missing))
+            for key, row in zip(missing, np.asarray(self.reach_fn(setups[rows]), dtype=bool)):
+                self._memo[key] = row
+        return np.stack([self._memo[key] for key in keys])
+
+
 def lookup_reach(grid_setups, cover, fallback: Callable[[np.ndarray], np.ndarray] | None = None):
     """A reach function answering from a precomputed cover matrix.
 
