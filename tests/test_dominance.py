@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mavac.planning.dominance import first_of_each_row, nondominated, pack_rows
+from mavac.planning.dominance import dominated_by_any, first_of_each_row, nondominated, pack_rows
 
 
 def nondominated_brute(cover):
@@ -63,6 +63,20 @@ def test_first_of_each_row_is_the_index_np_unique_returns(seed, m, words):
     first = first_of_each_row(rows)
     assert first.dtype == np.int64
     np.testing.assert_array_equal(np.sort(first), np.sort(expected))
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 30), st.integers(0, 30), st.integers(1, 200))
+def test_dominated_by_any_is_the_subset_test_pair_by_pair(seed, k, m, n):
+    """Nested rows (so many candidates have a superset), empty candidates among them."""
+    rng = np.random.default_rng(seed)
+    sup = rng.random((m, n)) < rng.uniform(0.2, 0.95)
+    cand = rng.random((k, n)) < rng.uniform(0.0, 0.5)
+    if m:
+        cand[::2] &= sup[rng.integers(0, m, len(cand[::2]))]
+    expected = [any(not np.any(c & ~s) for s in sup) for c in cand]
+    got = dominated_by_any(pack_rows(cand), pack_rows(sup))
+    np.testing.assert_array_equal(got, np.array(expected, dtype=bool).reshape(k))
 
 
 def test_no_setups_and_no_patches():

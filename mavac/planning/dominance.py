@@ -12,10 +12,8 @@ import numpy as np
 
 from ..validate import check_cover
 
-# Memory cap (uint64 words) of one block of pairwise subset tests.
+# Memory cap (array elements) of one block of pairwise subset tests.
 _BLOCK_WORDS = 1 << 22
-# Word-by-word refutation rounds before the remaining pairs are tested on all words.
-_PAIR_ROUNDS = 6
 
 
 def pack_rows(cover) -> np.ndarray:
@@ -40,30 +38,29 @@ def pack_rows(cover) -> np.ndarray:
     return packed.view(np.uint64)
 
 
+def _bits(words: np.ndarray) -> np.ndarray:
+    """Packed rows (k, w) uint64 back to (k, 64 w) bool, patch i at column i."""
+    return np.unpackbits(np.ascontiguousarray(words).view(np.uint8), axis=1, bitorder="little").view(bool)
+
+
 def dominated_by_any(cand: np.ndarray, sup: np.ndarray) -> np.ndarray:
-    """``out[i]`` True when some row of ``sup`` is a superset of ``cand[i]``."""
-    out = np.zeros(len(cand), dtype=bool)
+    """``out[i]`` True when some row of ``sup`` is a superset of ``cand[i]``.
+
+    A superset holds every patch of the candidate, so only the rows of ``sup`` holding the
+    candidate's rarest patch (the one fewest rows of ``sup`` hold) are tested, on every word.
+    """
+    out = ~cand.any(axis=1)  # the empty set is in every row
     if len(sup) == 0 or len(cand) == 0:
-        return out
-    n_words = cand.shape[1]
+        return np.zeros(len(cand), dtype=bool)
+    sup_bits = _bits(sup)
+    held = sup_bits.sum(axis=0)
     not_sup = ~sup
-    # Test each candidate's fullest words first: most (candidate, superset) pairs are refuted
-    # by one word, and the survivors are tracked as a shrinking list of pairs.
-    word_order = np.argsort(-np.bitwise_count(cand), axis=1, kind="stable")
-    step = max(1, _BLOCK_WORDS // len(sup))
+    step = max(1, _BLOCK_WORDS // max(len(sup), sup_bits.shape[1]))
+    chunk = max(1, _BLOCK_WORDS // cand.shape[1])
     for a in range(0, len(cand), step):
         blk = cand[a : a + step]
-        wo = word_order[a : a + step]
-        k0 = wo[:, 0]
-        alive = (blk[np.arange(len(blk)), k0][:, None] & not_sup[:, k0].T) == 0
-        i, j = np.nonzero(alive)
-        for r in range(1, min(n_words, _PAIR_ROUNDS)):
-            if len(i) == 0:
-                break
-            k = wo[i, r]
-            ok = (blk[i, k] & not_sup[j, k]) == 0
-            i, j = i[ok], j[ok]
-        chunk = max(1, _BLOCK_WORDS // n_words)
+        rarest = np.argmin(np.where(_bits(blk), held, len(sup) + 1), axis=1)
+        i, j = np.nonzero(sup_bits[:, rarest].T)
         for c in range(0, len(i), chunk):
             ic, jc = i[c : c + chunk], j[c : c + chunk]
             ok = ((blk[ic] & not_sup[jc]) == 0).all(axis=1)
