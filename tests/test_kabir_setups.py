@@ -86,6 +86,26 @@ def test_min_cover_size_equals_brute_force():
     assert {1, 2, 3, 4} <= sizes  # every branch of min_cover_size ran
 
 
+def test_min_cover_size_asks_the_milp_when_the_proof_runs_out_of_nodes(monkeypatch):
+    from mavac.planning.certified import certified_cover
+    from mavac.planning.setcover import brute_force_setup_cover
+
+    calls = []
+
+    def unproven(cover, costs):
+        calls.append(len(cover))
+        return dataclasses.replace(certified_cover(cover, costs), status="node_limited")
+
+    monkeypatch.setattr(K, "certified_cover", unproven)
+    rng = np.random.default_rng(8)
+    for _ in range(200):
+        m, n = int(rng.integers(1, 14)), int(rng.integers(1, 40))
+        cover = rng.random((m, n)) < rng.uniform(0.05, 0.5)
+        best = len(brute_force_setup_cover(cover, np.ones(m))[0]) if cover.any() else 0
+        assert K.min_cover_size(cover) == best
+    assert calls  # the proof was asked, and refused, at least once
+
+
 def test_exhaustion_diagnosis_equals_the_seed_by_seed_descent():
     """The map-based diagnosis keeps exactly the seeds that gradient_descent, run seed by seed
     (the reference), keeps after each round, on a random grid whose CA runs exhaust it."""
