@@ -3,7 +3,9 @@
 ``python -m mavac.docs_results`` rewrites ``docs/results.md`` and the README's block between
 ``<!-- results:start -->`` and ``<!-- results:end -->`` from ``data/results/*.csv`` (ours) and
 ``data/paper_values.csv`` (the papers', through :mod:`mavac.paper`), so the results text cannot
-drift from the data. ``--check`` writes nothing and exits with status 1 when either is stale.
+drift from the data; and the README's block between ``<!-- times:start -->`` and
+``<!-- times:end -->``: each notebook's wall and CPU time in the last ``make reproduce``
+(``data/results/reproduce_times.csv``). ``--check`` writes nothing and exits with status 1 when either is stale.
 
 One small function per paper table. Each reads only the columns it needs; a missing CSV or
 column gives a "not run" section instead of an error, so a table whose notebook has not been
@@ -27,6 +29,8 @@ RESULTS_DIR = DATA_DIR / "results"
 RESULTS_MD = ROOT / "docs" / "results.md"
 README_MD = ROOT / "README.md"
 START, END = "<!-- results:start -->", "<!-- results:end -->"
+TIMES_START, TIMES_END = "<!-- times:start -->", "<!-- times:end -->"
+TIMES_CSV = "reproduce_times.csv"
 OBJECTS = ("sine", "schwefel", "concave_bowl", "hyperboloid")
 DASH = "—"
 
@@ -713,12 +717,33 @@ def _table2_gap() -> list[str]:
                 f"[causes per test](docs/results.md#mavac-misses)): {_largest_causes(misses, causes, variant)}."]
 
 
-def replace_block(readme: str, block: str) -> str:
-    """``readme`` with the text between the markers (markers included) replaced by ``block``."""
-    if START not in readme or END not in readme:
-        raise ValueError(f"README.md has no {START} ... {END} block")
-    head, rest = readme.split(START, 1)
-    return head + block + rest.split(END, 1)[1]
+def times_block() -> str:
+    """The README's table of the last ``make reproduce`` (between the times markers, markers
+    included): minutes of wall and CPU time per notebook, and the whole run's."""
+    path = RESULTS_DIR / TIMES_CSV
+    if not path.is_file():
+        body = f"*Not run: `data/results/{TIMES_CSV}` is not there (run `make reproduce`).*"
+    else:
+        times = pd.read_csv(path)
+        rows = [[f"**{n}**" if n == "total" else n, f"{w / 60:.1f}", f"{c / 60:.1f}"]
+                for n, w, c in zip(times["notebook"], times["wall_s"], times["cpu_s"])]
+        body = _table(["notebook", "wall (min)", "CPU (min)"], rows)
+    return "\n".join([TIMES_START, "", body, "", TIMES_END])
+
+
+def replace_block(readme: str, block: str, *, start: str = START, end: str = END) -> str:
+    """``readme`` with the text between ``start`` and ``end`` (markers included) replaced by
+    ``block``."""
+    if start not in readme or end not in readme:
+        raise ValueError(f"README.md has no {start} ... {end} block")
+    head, rest = readme.split(start, 1)
+    return head + block + rest.split(end, 1)[1]
+
+
+def readme_text(secs: list[Section] | None = None) -> str:
+    """The README with its results and times blocks regenerated."""
+    readme = replace_block(README_MD.read_text(), readme_block(secs))
+    return replace_block(readme, times_block(), start=TIMES_START, end=TIMES_END)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -726,7 +751,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 when a page is stale")
     args = ap.parse_args(argv)
     secs = sections()
-    targets = {RESULTS_MD: results_page(secs), README_MD: replace_block(README_MD.read_text(), readme_block(secs))}
+    targets = {RESULTS_MD: results_page(secs), README_MD: readme_text(secs)}
     stale = [p for p, text in targets.items() if not p.is_file() or p.read_text() != text]
     if args.check:
         for p in stale:

@@ -104,7 +104,8 @@ WALL_CLOCK: dict[tuple[str, str], str] = {
 
 #: ``(file, field) -> (rtol, reason)``: fields whose floating-point kernels differ between
 #: processors, compared within ``rtol``. None is declared: docs/reproduce.md ("Tolerances")
-#: gives the measurement that rules out the candidate (Open3D ICP results).
+#: gives the measurements that rule out the candidates (Open3D ICP results, the online trials'
+#: simulated times and forces).
 RELATIVE_TOLERANCE: dict[tuple[str, str], tuple[float, str]] = {}
 
 #: Files outside ``mavac/`` that a module reads at run time (their values reach the results).

@@ -26,6 +26,25 @@ def test_readme_results_block_is_current():
     assert docs_results.replace_block(readme, docs_results.readme_block()) == readme, REGENERATE
 
 
+def test_readme_times_block_is_current():
+    readme = (ROOT / "README.md").read_text()
+    block = docs_results.times_block()
+    assert "Not run" not in block and "| **total** |" in block
+    assert docs_results.replace_block(readme, block, start=docs_results.TIMES_START,
+                                      end=docs_results.TIMES_END) == readme, REGENERATE
+
+
+def test_times_block_in_minutes_and_not_run_without_its_csv(tmp_path, monkeypatch):
+    monkeypatch.setattr(docs_results, "RESULTS_DIR", tmp_path)
+    assert "*Not run: `data/results/reproduce_times.csv` is not there" in docs_results.times_block()
+    pd.DataFrame(dict(notebook=["05_online_cleaning", "total"], wall_s=[90.0, 120.0], cpu_s=[180.0, 180.0])).to_csv(
+        tmp_path / "reproduce_times.csv", index=False)
+    block = docs_results.times_block()
+    assert "| 05_online_cleaning | 1.5 | 3.0 |" in block and "| **total** | 2.0 | 3.0 |" in block
+    with pytest.raises(ValueError, match="times:start"):
+        docs_results.replace_block("no markers", block, start=docs_results.TIMES_START, end=docs_results.TIMES_END)
+
+
 def test_every_section_has_data_and_robot_results_say_simulated():
     secs = docs_results.sections()
     assert [s for s in secs if "Not run" in s.body] == []
