@@ -55,11 +55,13 @@ def test_declared_wall_clock_columns_exist_in_the_committed_headers():
         assert reason
         if key in committed:  # reproduce_times.csv appears with the first `make reproduce`
             assert column in pd.read_csv(committed[key], nrows=0).columns, (key, column)
+    for (key, column), (flag, reason) in V.ONLY_WHERE_SUCCEEDED.items():
+        assert reason and {column, flag} <= set(pd.read_csv(committed[key], nrows=0).columns), (key, column)
 
 
 def test_docs_list_every_declared_column_and_tolerance():
     page = (ROOT / "docs" / "reproduce.md").read_text()
-    for key, column in [*V.WALL_CLOCK, *V.RELATIVE_TOLERANCE]:
+    for key, column in [*V.WALL_CLOCK, *V.RELATIVE_TOLERANCE, *V.ONLY_WHERE_SUCCEEDED]:
         assert f"`{column}`" in page and key.split("/")[1] in page, (key, column)
 
 
@@ -87,6 +89,23 @@ def test_compare_csv_names_rows_and_columns(tmp_path):
     assert V.compare_csv(a, b, ignore={"seconds"}) == "2 rows, columns x"
     assert V.compare_csv(a, b, ignore={"seconds", "x"}) is None
     assert V.compare_csv(a, b, ignore={"seconds"}, rtol={"x": 0.02}) == "1 rows, columns x"
+
+
+def test_compare_csv_compares_declared_columns_only_where_a_run_succeeded(tmp_path):
+    a = _csv(tmp_path / "a.csv", "k,err,success\n1,0.5,True\n2,2287.12,False\n3,0.1,False\n")
+    b = _csv(tmp_path / "b.csv", "k,err,success\n1,0.5,True\n2,2521.33,False\n3,0.2,True\n")
+    assert V.compare_csv(a, b) == "2 rows, columns err, success"
+    assert V.compare_csv(a, b, when={"err": "success"}) == "1 rows, columns err, success"  # row 3 succeeded once
+    c = _csv(tmp_path / "c.csv", "k,err,success\n1,0.6,True\n2,9.0,False\n3,0.1,False\n")
+    assert V.compare_csv(a, c, when={"err": "success"}) == "1 rows, columns err"  # a succeeded row still counts
+    d = _csv(tmp_path / "d.csv", "k,err,success\n1,0.5,True\n2,9.0,False\n3,7.0,False\n")
+    assert V.compare_csv(a, d, when={"err": "success"}) is None
+
+
+def test_icp_trials_declare_their_diverged_errors():
+    _, _, when = V.rules("results/kabir_icp_trials.csv")
+    assert when == {c: "success" for c in ("translation_error_m", "rotation_error_rad", "adds_m")}
+    assert V.rules("results/kabir_icp.csv")[2] == {}
 
 
 def test_compare_csv_header_length_and_formatting(tmp_path):
