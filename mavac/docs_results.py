@@ -4,8 +4,9 @@
 ``<!-- results:start -->`` and ``<!-- results:end -->`` from ``data/results/*.csv`` (ours) and
 ``data/paper_values.csv`` (the papers', through :mod:`mavac.paper`), so the results text cannot
 drift from the data; and the README's block between ``<!-- times:start -->`` and
-``<!-- times:end -->``: each notebook's wall and CPU time in the last ``make reproduce``
-(``data/results/reproduce_times.csv``). ``--check`` writes nothing and exits with status 1 when either is stale.
+``<!-- times:end -->``: each notebook's wall and CPU time in the last paper-scale run
+(``data/results/reproduce_times.csv``). ``--check`` writes nothing and exits with status 1 when
+a page is stale.
 
 One small function per paper table. Each reads only the columns it needs; a missing CSV or
 column gives a "not run" section instead of an error, so a table whose notebook has not been
@@ -718,7 +719,7 @@ def _table2_gap() -> list[str]:
 
 
 def times_block() -> str:
-    """The README's table of the last ``make reproduce`` (between the times markers, markers
+    """The README's table of the last paper-scale run (between the times markers, markers
     included): minutes of wall and CPU time per notebook, and the whole run's."""
     path = RESULTS_DIR / TIMES_CSV
     if not path.is_file():
