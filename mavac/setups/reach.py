@@ -473,6 +473,23 @@ def setup_keys(setups) -> list[tuple[int, int, int]]:
     return [tuple(row) for row in q.reshape(-1, 3).tolist()]
 
 
+def _ask_missing(memo: dict, keys: list, setups: np.ndarray, reach_fn) -> int:
+    """Ask ``reach_fn`` once for the setups (k, 3) whose key is not in ``memo`` (the first setup
+    of each new key) and store the answers under their keys; returns how many it asked for."""
+    missing: dict = {}
+    for i, key in enumerate(keys):
+        if key not in memo and key not in missing:
+            missing[key] = i
+    if missing:
+        rows = np.fromiter(missing.values(), dtype=np.int64, count=len(missing))
+        answer = np.asarray(reach_fn(setups[rows]), dtype=bool)
+        if answer.ndim != 2 or answer.shape[0] != len(rows):
+            raise ValueError(f"reach_fn must return a (k, n) bool array for k={len(rows)} setups, "
+                             f"got shape {answer.shape}")
+        memo.update(zip(missing, answer))
+    return len(missing)
+
+
 class CountingReach:
     """A reach function that counts n_rfc the way the paper does and remembers its answers.
 
@@ -495,19 +512,7 @@ class CountingReach:
     def __call__(self, setups) -> np.ndarray:
         setups = check_points("setups", setups, 3)
         keys = setup_keys(setups)
-        missing: dict[tuple, int] = {}
-        for i, key in enumerate(keys):
-            if key not in self._memo and key not in missing:
-                missing[key] = i
-        if missing:
-            rows = np.fromiter(missing.values(), dtype=np.int64, count=len(missing))
-            answer = np.asarray(self.reach_fn(setups[rows]), dtype=bool)
-            if answer.ndim != 2 or answer.shape[0] != len(rows):
-                raise ValueError(f"reach_fn must return a (k, n) bool array for k={len(rows)} setups, "
-                                 f"got shape {answer.shape}")
-            for key, row in zip(missing, answer):
-                self._memo[key] = row
-            self.n_rfc += len(rows)
+        self.n_rfc += _ask_missing(self._memo, keys, setups, self.reach_fn)
         if not keys:
             return np.zeros((0, self.n_patches), dtype=bool)
         return np.stack([self._memo[key] for key in keys])
@@ -543,14 +548,7 @@ class SharedReach:
         if len(setups) == 0:
             return np.asarray(self.reach_fn(setups), dtype=bool)
         keys = [row.tobytes() for row in setups]
-        missing: dict[bytes, int] = {}
-        for i, key in enumerate(keys):
-            if key not in self._memo and key not in missing:
-                missing[key] = i
-        if missing:
-            rows = np.fromiter(missing.values(), dtype=np.int64, count=len(missing))
-            for key, row in zip(missing, np.asarray(self.reach_fn(setups[rows]), dtype=bool)):
-                self._memo[key] = row
+        _ask_missing(self._memo, keys, setups, self.reach_fn)
         return np.stack([self._memo[key] for key in keys])
 
 
