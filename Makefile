@@ -103,11 +103,12 @@ at-scale: $(if $(ONLY),run-$(ONLY),$(RUNS))
 $(RUNS): run-%:
 	MAVAC_FAST=0 MAVAC_JOBS=$(MAVAC_JOBS) $(PY) -m mavac.verify run $* --out $(OUT) --executed $(EXECUTED)
 
-# Two lanes, side by side: A = 00 01 02 03 04 05 12, B = 06 07 08 09 10 11. Notebook 05 (the
+# Two lanes, side by side: A = 00 01 02 03 04 05, B = 06 07 08 09 10 11 12. Notebook 05 (the
 # online trials) is the longest single notebook, so lane B runs everything else beside it.
 # Notebooks sharing an on-disk cache (build/cache) keep their order, so the first computes an
 # entry and the next reads it (never two computing it at once): 01-05 the machines'
-# reachability maps and offline plans; 06 -> 07 -> 08 the Kabir baseline reach sweeps; 12 both.
+# reachability maps and offline plans; 06 -> 07 -> 08 the Kabir baseline reach sweeps; 12 the
+# maps of 01-04 and the baselines of 06-08 (05's online plans are entries of their own).
 # 00, 09, 10 and 11 use no disk cache: their place in a lane only balances the two lanes.
 ifeq ($(ONLY),)
 run-01: run-00
@@ -120,10 +121,11 @@ run-08: run-07
 run-09: run-08
 run-10: run-09
 run-11: run-10
-run-12: run-05 run-08
+run-12: run-04 run-11
 endif
-# Notebooks 05 and 12 run their trials on two workers: beside lane B they share the cores, and
-# once lane B is done they have both (trials take their seeds from their arguments: same rows).
+# Notebooks 05 and 12 run their trials on two workers: beside the other lane they share the
+# cores, and once it is done they have both (trials take their seeds from their arguments: same
+# rows).
 run-05 run-12: MAVAC_JOBS = 2
 
 bench: system-deps $(STAMP)

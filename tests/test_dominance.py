@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mavac.planning.dominance import dominated_by_any, first_of_each_row, nondominated, pack_rows
+from mavac.planning.dominance import dominated_by_any, first_of_each_row, nondominated, pack_rows, row_groups
 
 
 def nondominated_brute(cover):
@@ -63,6 +63,22 @@ def test_first_of_each_row_is_the_index_np_unique_returns(seed, m, words):
     first = first_of_each_row(rows)
     assert first.dtype == np.int64
     np.testing.assert_array_equal(np.sort(first), np.sort(expected))
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 40), st.integers(1, 4))
+def test_row_groups_number_np_uniques_groups_by_first_row(seed, m, words):
+    rng = np.random.default_rng(seed)
+    patterns = rng.integers(0, 256, (4, words), dtype=np.uint8)
+    rows = patterns[rng.integers(0, 4, m)]
+    groups = row_groups(rows)
+    assert groups.dtype == np.int64 and groups.shape == (m,)
+    if m == 0:
+        return
+    _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    np.testing.assert_array_equal(groups, rank[inverse.ravel()])
 
 
 @settings(max_examples=100, deadline=None)

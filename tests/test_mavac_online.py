@@ -123,3 +123,31 @@ def test_sensitivity_table_puts_the_nominal_first_and_pools_seeds():
     assert table.dimension.tolist() == ["nominal", "mill_sill"]
     assert table.cleaning_pct.tolist() == [pytest.approx(60.0), pytest.approx(35.0)]
     assert table.seeds.tolist() == ["1 2", "1 2"] and table.mill_sill.tolist() == [0.0, 0.07]
+
+
+def test_trials_of_makes_each_plan_once_then_runs_every_item_in_order(monkeypatch):
+    made = []
+    monkeypatch.setattr(mon, "offline_plan", lambda scene, reading, *, offline, fast, stand_in:
+                        made.append((scene, reading, offline, stand_in)))
+    monkeypatch.setattr(mon, "_trial", lambda item: (item[0], item[2]))
+    items = [("test_bench", ("paper", "hpr"), seed, True, None) for seed in (1, 2)]
+    items.append(("sanding_milling", ("paper", "raycast"), 1, True, None))
+    assert mon.trials_of(items, n_jobs=1) == [("test_bench", 1), ("test_bench", 2), ("sanding_milling", 1)]
+    assert made == [("test_bench", "paper", "hpr", None), ("sanding_milling", "paper", "raycast", None)]
+
+
+def test_run_sensitivity_maps_every_point_and_seed_at_once_and_labels_each_run(monkeypatch):
+    maps = []
+
+    def trials_of(items, *, n_jobs):
+        maps.append(items)
+        return [dict(trial=item[2], ran_on=item[4]) for item in items]
+
+    monkeypatch.setattr(mon, "trials_of", trials_of)
+    runs = mon.run_sensitivity(seeds=(1, 2))
+    points = mon.sensitivity_points()
+    assert len(maps) == 1 and len(runs) == 2 * len(points)
+    for k, run in enumerate(runs):
+        dimension, value, stand_in = points[k // 2]
+        assert (run["dimension"], run["value"], run["stand_in"], run["ran_on"], run["trial"]) == \
+            (dimension, value, stand_in, stand_in, (1, 2)[k % 2])

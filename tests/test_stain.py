@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mavac.vision.stain import (cleaning_performance, face_index_image, passes_from_image,
+from mavac.vision.stain import (cleaning_performance, face_index_image, median_colour, passes_from_image,
                                 render_stain_image, stain_mask_kmeans, stain_masks_kmeans,
                                 view_of_faces)
 
@@ -128,3 +128,16 @@ def test_bad_inputs(sphere):
         passes_from_image(np.zeros((4, 4, 3), np.uint8), n_clusters=1)
     with pytest.raises(ValueError, match="n_clusters"):
         passes_from_image(np.zeros((4, 4, 3), np.uint8), n_clusters=3)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 257, 1000])
+def test_median_colour_is_numpys_median_truncated_to_uint8(n):
+    rng = np.random.default_rng(n)
+    for spread in (256, 3):  # spread 3: many ties, even counts whose middle values differ by one
+        pixels = rng.integers(0, spread, (n, 3)).astype(np.uint8) + np.uint8(200 if spread == 3 else 0)
+        assert median_colour(pixels).tolist() == np.median(pixels, axis=0).astype(np.uint8).tolist()
+
+
+def test_one_coloured_images_give_empty_masks():
+    images = [np.full((8, 8, 3), 90, dtype=np.uint8)] * 2
+    assert not any(m.any() for m in stain_masks_kmeans(images, 0))

@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 from mavac.geometry.transforms import transform_points
 from mavac.params import LissajousParams, ScrubModel
 from mavac.scrubbing.wear import (ContactWear, ScrubExperiment, lissajous_from_vector, measure_cp, removal_depth,
-                             removal_from_vector, scrub_faces, stain_hardness, stain_opacity,
+                             removal_from_vector, render_stain_states, scrub_faces, stain_hardness, stain_opacity,
                              vector_from_lissajous)
 
 
@@ -166,3 +166,30 @@ def test_contact_wear_only_where_the_pad_is():
     assert wear.removal[z > 0.0004].sum() > 0  # the top face under the pad
     assert np.all(wear.removal[z < 0.0004] == 0)  # its underside (facing away) and the lower plate
     assert wear.deepest <= 0.002
+
+
+def test_render_stain_states_renders_each_state_as_render_stain_image_does():
+    from mavac.vision.stain import face_index_image, render_stain_image
+
+    mesh = trimesh.creation.icosphere(2)
+    face_index = face_index_image(mesh, np.array([0.0, 0.0, -1.0]), (32, 32))
+    states = [np.linspace(0.0, 2.0, len(mesh.faces)), np.zeros(len(mesh.faces))]
+    images = render_stain_states(mesh, states, face_index, noise_std=0.02, rng=np.random.default_rng(3))
+    rng = np.random.default_rng(3)
+    for state, image in zip(states, images):
+        expected = render_stain_image(mesh, stain_opacity(state), None, face_index=face_index, noise_std=0.02, rng=rng)
+        assert np.array_equal(image, expected)
+
+
+def test_render_stain_states_refuses_a_state_of_another_length_or_with_nan():
+    from mavac.vision.stain import face_index_image
+
+    mesh = trimesh.creation.icosphere(1)
+    face_index = face_index_image(mesh, np.array([0.0, 0.0, -1.0]), (16, 16))
+    good = np.zeros(len(mesh.faces))
+    with pytest.raises(ValueError, match=r"states\[1\] must be a thickness per face"):
+        render_stain_states(mesh, [good, good[:-1]], face_index, rng=np.random.default_rng(0))
+    with pytest.raises(ValueError, match=r"states\[0\]"):
+        render_stain_states(mesh, [np.full(len(mesh.faces), np.nan)], face_index, rng=np.random.default_rng(0))
+    with pytest.raises(ValueError, match="rng is required"):
+        render_stain_states(mesh, [good], face_index, noise_std=0.02)

@@ -107,20 +107,35 @@ def _trial(args) -> dict:
                 regions=heap_regions(machine, result.heaps), unseen=unseen_heaps(plan, result.heaps))
 
 
+def _make_plan(args) -> None:
+    scene, (reading, offline), fast, stand_in = args
+    offline_plan(scene, reading, offline=offline, fast=fast, stand_in=stand_in)
+
+
+def trials_of(items: list, *, n_jobs=None) -> list[dict]:
+    """Run the trials ``items``, each ``(scene, (reading, offline), seed, fast, stand_in)``:
+    their distinct offline plans first, one map over the workers (the disk cache hands each
+    to its trials), then every trial in one map, so that no worker waits for a group's last
+    trial (ours, because the cores are the cost of ``make reproduce``)."""
+    plans = list(dict.fromkeys((scene, variant, fast, stand_in) for scene, variant, _, fast, stand_in in items))
+    map_trials(_make_plan, plans, n_jobs=n_jobs, desc="offline plans")
+    return map_trials(_trial, items, n_jobs=n_jobs, desc="online trials")
+
+
+def _trial_items(scenes, variants, seeds, fast, stand_in) -> list:
+    return [(s, tuple(v), t, fast, stand_in) for v in variants for s in scenes for t in seeds]
+
+
 def run_trials(*, scenes=SCENES, variants=readings.VARIANTS, trials: int = 10, fast: bool = False,
                n_jobs=None, stand_in: StandIn | None = None, seeds=None) -> list[dict]:
     """``trials`` trials per scene and variant ``(reading, offline)`` (seed = trial number, so
     every variant cleans the same heap layouts; at most :data:`MAX_TRIALS`), or one per seed of
-    ``seeds``; plans are made first, once each."""
+    ``seeds``, through :func:`trials_of`."""
     scenes, variants = check_sequence("scenes", scenes), check_sequence("variants", variants)
     for reading, offline in variants:
         readings.check_reading(reading), readings.check_offline(offline)
     seeds = range(1, check_int("trials", trials, 1, MAX_TRIALS) + 1) if seeds is None else check_sequence("seeds", seeds)
-    for scene in scenes:
-        for reading, offline in variants:
-            offline_plan(scene, reading, offline=offline, fast=fast, stand_in=stand_in)
-    items = [(s, tuple(v), t, fast, stand_in) for v in variants for s in scenes for t in seeds]
-    return map_trials(_trial, items, n_jobs=n_jobs, desc="online trials")
+    return trials_of(_trial_items(scenes, variants, seeds, fast, stand_in), n_jobs=n_jobs)
 
 
 def unseen_heaps(plan, heaps) -> np.ndarray:
@@ -375,12 +390,14 @@ def run_sensitivity(*, seeds=(1, 2, 3), fast: bool = False, n_jobs=None) -> list
     """Sanding + milling trials (:data:`SENSITIVITY_VARIANT`, seeds ``seeds``) at each point of
     :func:`sensitivity_points`; each run carries its ``dimension``, ``value`` and ``stand_in``.
     The nominal point's runs are Table 2's (:func:`run_trials`), not repeated here."""
-    runs = []
-    for dimension, value, stand_in in sensitivity_points(fast=fast):
-        for run in run_trials(scenes=["sanding_milling"], variants=[SENSITIVITY_VARIANT], seeds=list(seeds),
-                              fast=fast, n_jobs=n_jobs, stand_in=stand_in):
-            runs.append(run | dict(dimension=dimension, value=value, stand_in=stand_in))
-    return runs
+    seeds = check_sequence("seeds", seeds)
+    points = sensitivity_points(fast=fast)
+    items = [item for _, _, stand_in in points
+             for item in _trial_items(["sanding_milling"], [SENSITIVITY_VARIANT], seeds, fast, stand_in)]
+    runs = trials_of(items, n_jobs=n_jobs)
+    point_of_run = [point for point in points for _ in seeds]
+    return [run | dict(dimension=dimension, value=value, stand_in=stand_in)
+            for (dimension, value, stand_in), run in zip(point_of_run, runs)]
 
 
 def sensitivity_table(nominal_runs: list[dict], runs: list[dict]) -> pd.DataFrame:

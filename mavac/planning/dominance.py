@@ -81,9 +81,37 @@ def first_of_each_row(words: np.ndarray) -> np.ndarray:
     """
     if len(words) == 0:
         return np.zeros(0, dtype=np.int64)
+    order, starts = _sorted_rows(words)
+    return order[starts]
+
+
+def _sorted_rows(words: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row order of a stable lexsort of ``words`` (m, w), m >= 1, and where each run of equal
+    rows starts in it, (m,) bool."""
     order = np.lexsort(words.T[::-1])  # stable: equal rows keep their index order
     ranked = words[order]
-    return order[np.r_[True, np.any(ranked[1:] != ranked[:-1], axis=1)]]
+    return order, np.r_[True, np.any(ranked[1:] != ranked[:-1], axis=1)]
+
+
+def row_groups(words: np.ndarray) -> np.ndarray:
+    """Group of each row of ``words`` (m, w): equal rows share a group, and the groups are
+    numbered in the order of their first rows. The ``rank[inverse]`` of
+    ``np.unique(words, axis=0, return_index=True, return_inverse=True)`` with the unique rows
+    ranked by first index, by the lexsort of :func:`first_of_each_row`.
+
+    Returns
+    -------
+    (m,) int64
+    """
+    if len(words) == 0:
+        return np.zeros(0, dtype=np.int64)
+    order, starts = _sorted_rows(words)
+    firsts = order[starts]
+    rank = np.empty(len(firsts), dtype=np.int64)
+    rank[np.argsort(firsts, kind="stable")] = np.arange(len(firsts))
+    groups = np.empty(len(words), dtype=np.int64)
+    groups[order] = rank[np.cumsum(starts) - 1]
+    return groups
 
 
 def nondominated(cover) -> np.ndarray:

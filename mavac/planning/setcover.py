@@ -37,6 +37,7 @@ from ..params import SETUP_COVER_METHODS, CertifyParams, SetupPlannerParams
 from ..validate import check_cover
 from .iess import initial_estimate_of_setup_size, n_repeat_recommended, row_bitsets
 from .certified import certified_cover
+from .dominance import row_groups
 from .reduction import reduce_instance
 
 # Above this many random trials the Section IX-B choice of N_repeat is refused unless T_max
@@ -195,13 +196,11 @@ def _compress(cover: np.ndarray, area: np.ndarray, patch_time: np.ndarray | None
     cols = cover[:, coverable].T
     if cols.shape[0] == 0:
         return _Compressed(np.zeros((m, 0), bool), np.zeros(0), np.zeros(0), [0] * m, [], uncoverable)
-    uniq, first, inverse = np.unique(cols, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    group_area = np.bincount(rank[inverse.ravel()], weights=area[coverable], minlength=len(order))
-    group_time = np.bincount(rank[inverse.ravel()], weights=patch_time[coverable], minlength=len(order))
-    ccover = np.ascontiguousarray(uniq[order].T)
+    group = row_groups(np.packbits(cols, axis=1))  # patches with the same setups, by first patch
+    first = np.unique(group, return_index=True)[1]
+    group_area = np.bincount(group, weights=area[coverable], minlength=len(first))
+    group_time = np.bincount(group, weights=patch_time[coverable], minlength=len(first))
+    ccover = np.ascontiguousarray(cols[first].T)
     masks = row_bitsets(ccover)
     groups_setups = [np.flatnonzero(ccover[:, g]).tolist() for g in range(ccover.shape[1])]
     return _Compressed(ccover, group_area, group_time, masks, groups_setups, uncoverable)
@@ -209,7 +208,7 @@ def _compress(cover: np.ndarray, area: np.ndarray, patch_time: np.ndarray | None
 
 def _bits_to_bool(bits: int, k: int) -> np.ndarray:
     raw = np.frombuffer(bits.to_bytes(max(1, -(-k // 8)), "little"), dtype=np.uint8)
-    return np.unpackbits(raw, bitorder="little", count=k).astype(bool)
+    return np.unpackbits(raw, bitorder="little", count=k).view(bool)  # 0/1 bytes: a view, no copy
 
 
 # ---------------------------------------------------------------------------------------------

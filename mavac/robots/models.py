@@ -16,6 +16,7 @@ floor under the centre of the platform).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -194,6 +195,13 @@ def _add_tool_inertia(model, joint: int, joint_T_flange: pin.SE3, joint_T_camera
     model.appendBodyToJoint(joint, pin.Inertia.FromBox(KINECT_MASS, *KINECT_SIZE), joint_T_camera)
 
 
+@functools.cache
+def _ur10_description():
+    """example-robot-data's UR10, parsed once per process (0.4 s a parse; trials build a robot
+    each): read only, ``pin.appendModel`` copies it into every new model."""
+    return example_robot_data.load("ur10")
+
+
 def ur10_mobile() -> RobotModel:
     """UR10 (example-robot-data) on a MiR200-sized SE(2) base, with vacuum tool and camera.
 
@@ -203,7 +211,7 @@ def ur10_mobile() -> RobotModel:
     (x = optical axis = tool z) are attached to the flange ``tool0``.
     Joint limits are those of example-robot-data's ``ur10_robot.urdf`` (+-2 pi, elbow +-pi).
     """
-    ur = example_robot_data.load("ur10")
+    ur = _ur10_description()
     root = pin.Model()
     root.name = "ur10_mobile"
     root_frame = root.addFrame(pin.Frame("mobile_base", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))

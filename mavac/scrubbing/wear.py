@@ -45,9 +45,9 @@ import trimesh
 from ..geometry.mesh import check_mesh
 from ..geometry.transforms import transform_each_point
 from ..params import OPERATION_PARAMS, LissajousParams, ScrubModel
-from ..validate import check_array, check_instance, check_int, check_points, check_positive
-from ..vision.stain import (OrthoView, cleaning_performance, face_index_image,
-                                render_stain_image, stain_masks_kmeans, view_of_faces)
+from ..validate import check_array, check_instance, check_int, check_nonnegative, check_points, check_positive
+from ..vision.stain import (BACKGROUND_RGB, PART_RGB, STAIN_RGB, OrthoView, cleaning_performance,
+                            face_index_image, stain_masks_kmeans, stain_pixels, view_of_faces)
 
 
 def lissajous_from_vector(x, base: LissajousParams = LissajousParams()) -> LissajousParams:
@@ -229,9 +229,15 @@ def render_stain_states(mesh: trimesh.Trimesh, states, face_index, *, model: Scr
     -------
     list of (H, W, 3) uint8
     """
-    return [render_stain_image(mesh, stain_opacity(s, model), None, image_size=face_index.shape,
-                               noise_std=noise_std, rng=rng, face_index=face_index)
-            for s in states]
+    n_faces = len(check_mesh("mesh", mesh).faces)
+    check_nonnegative("noise_std", noise_std)
+    if noise_std > 0 and rng is None:
+        raise ValueError("rng is required when noise_std > 0")
+    opacities = [stain_opacity(s, model) for s in states]
+    for i, o in enumerate(opacities):
+        if o.shape != (n_faces,) or np.isnan(o).any():
+            raise ValueError(f"states[{i}] must be a thickness per face, shape ({n_faces},), without NaN")
+    return [stain_pixels(o, face_index, STAIN_RGB, PART_RGB, BACKGROUND_RGB, noise_std, rng) for o in opacities]
 
 
 def _cp_from_images(mesh, before, after, face_index, model, noise_std, rng, kmeans_seed) -> float:

@@ -133,10 +133,17 @@ def _rgb(name: str, colour) -> np.ndarray:
     return c
 
 
+#: Ours: the default colours of :func:`render_stain_image`, RGB in [0, 1]: a brown stain on an
+#: off-white part, black background.
+STAIN_RGB = (0.35, 0.22, 0.12)
+PART_RGB = (0.92, 0.92, 0.88)
+BACKGROUND_RGB = (0.0, 0.0, 0.0)
+
+
 def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, *, image_size=(96, 96),
-                       stain_rgb=(0.35, 0.22, 0.12), part_rgb=(0.92, 0.92, 0.88),
-                       noise_std: float = 0.02, rng: np.random.Generator | None = None,
-                       background_rgb=(0.0, 0.0, 0.0), face_index=None) -> np.ndarray:
+                       stain_rgb=STAIN_RGB, part_rgb=PART_RGB, noise_std: float = 0.02,
+                       rng: np.random.Generator | None = None, background_rgb=BACKGROUND_RGB,
+                       face_index=None) -> np.ndarray:
     """Orthographic image of a stained part (our camera stand-in).
 
     Each pixel takes the colour of the first face hit: ``part + s (stain - part)`` for the
@@ -169,17 +176,26 @@ def render_stain_image(mesh: trimesh.Trimesh, face_stain, view, *, image_size=(9
         raise ValueError("face_stain must be in [0, 1]")
     stain_c, part_c, back_c = _rgb("stain_rgb", stain_rgb), _rgb("part_rgb", part_rgb), _rgb("background_rgb", background_rgb)
     check_nonnegative("noise_std", noise_std)
+    if noise_std > 0 and rng is None:
+        raise ValueError("rng is required when noise_std > 0")
     if face_index is None:
         face_index = face_index_image(mesh, view, image_size)
+    return stain_pixels(face_stain, face_index, stain_c, part_c, back_c, noise_std, rng)
+
+
+def stain_pixels(face_stain: np.ndarray, face_index: np.ndarray, stain_c, part_c, back_c, noise_std: float,
+                 rng: np.random.Generator | None) -> np.ndarray:
+    """:func:`render_stain_image`'s pixels from its checked inputs (no checks: the loops that
+    render the same part many times check it once); colours (3,) in [0, 1]. (H, W, 3) uint8."""
+    stain_c, part_c, back_c = (np.asarray(c, dtype=float) for c in (stain_c, part_c, back_c))
     on_part = face_index >= 0
     s = np.where(on_part, face_stain[np.where(on_part, face_index, 0)], 0.0)
     colour = part_c + s[..., None] * (stain_c - part_c)
     colour = np.where(on_part[..., None], colour, back_c)
     if noise_std > 0:
-        if rng is None:
-            raise ValueError("rng is required when noise_std > 0")
-        colour = colour + rng.normal(0.0, noise_std, colour.shape)
-    return np.clip(np.rint(colour * 255), 0, 255).astype(np.uint8)
+        colour += rng.normal(0.0, noise_std, colour.shape)
+    colour *= 255
+    return np.clip(np.rint(colour, out=colour), 0, 255, out=colour).astype(np.uint8)
 
 
 def _value_range(a: np.ndarray) -> str:
@@ -237,7 +253,20 @@ def _fill_outside(image: np.ndarray, region: np.ndarray) -> np.ndarray:
     if region.all() or not region.any():
         return image
     out = image.copy()
-    out[~region] = np.median(image[region], axis=0).astype(np.uint8)
+    out[~region] = median_colour(image[region])
+    return out
+
+
+def median_colour(pixels: np.ndarray) -> np.ndarray:
+    """``np.median(pixels, axis=0).astype(np.uint8)`` of (n, 3) uint8 pixels, n >= 1, by
+    counting each channel's values: the two middle values of the sorted channel, their mean
+    truncated (numpy's median of an even count is the mean of the middle two). (3,) uint8."""
+    n = len(pixels)
+    out = np.empty(3, dtype=np.uint8)
+    for c in range(3):
+        cdf = np.cumsum(np.bincount(pixels[:, c], minlength=256))
+        lo, hi = np.searchsorted(cdf, [(n - 1) // 2, n // 2], side="right")
+        out[c] = (lo + hi) // 2
     return out
 
 
@@ -285,10 +314,11 @@ def stain_masks_kmeans(images, seed: int = 0, *, region_mask=None, light_stain: 
     region = _region(region_mask, shape)
     if denoise:
         images = [cv2.medianBlur(_fill_outside(im, region), 3) for im in images]
-    pixels = np.concatenate([im[region].reshape(-1, 3) for im in images]).astype(float) / 255.0
+    stacked = np.concatenate([im[region].reshape(-1, 3) for im in images])
     masks = [np.zeros(shape, dtype=bool) for _ in images]
-    if len(pixels) < 2 or np.ptp(pixels, axis=0).max() == 0:
+    if len(stacked) < 2 or np.array_equal(stacked.min(axis=0), stacked.max(axis=0)):  # one colour
         return masks
+    pixels = stacked.astype(float) / 255.0
     with single_thread():  # small problem: threads only add contention
         km = KMeans(n_clusters=2, n_init=1, random_state=seed).fit(_fit_sample(pixels, seed))
         labels = km.predict(pixels)
