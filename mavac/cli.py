@@ -27,7 +27,7 @@ import numpy as np
 
 from . import __version__
 from .config import cache_dir, user_output_dir
-from .io import atomic_paths
+from .io import atomic_paths, json_safe
 
 #: exit status of a run that ended without a plan (its files say why); 1 is bad input, 130 Ctrl-C
 NO_PLAN = 3
@@ -209,9 +209,20 @@ def _stain_kwargs(args, scale: float, intensity) -> dict:
     return kw
 
 
+def _marked_part(args, bar, intensity):
+    """The part mesh of ``args.part`` with its ``--stain`` marked (setups, scrub)."""
+    from .geometry.stain_marking import mark_stain
+
+    mesh = _load(args.part, args.units, "part", args.up)
+    _next(bar, "marking the stain")
+    with warnings.catch_warnings():  # the plan's summary says it
+        warnings.filterwarnings("ignore", message=".*larger than the tool tip")
+        return mark_stain(mesh, subdivide=args.subdivide, name=Path(args.part).stem,
+                          **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
+
+
 def cmd_setups(args) -> int:
     """Kabir et al. setup plan of a stained part: fewest, fastest setups on the Puma 560."""
-    from .geometry.stain_marking import mark_stain
     from .params import ReachParams, SetupPlanParams, SetupPlannerParams
     from .setups.setup_plan import plan_setups
 
@@ -227,12 +238,7 @@ def cmd_setups(args) -> int:
     t0 = time.perf_counter()
     bar = _stage_bar(["loading part", "marking the stain", "reach test and planning", "writing"], args.quiet)
     with bar:
-        mesh = _load(args.part, args.units, "part", args.up)
-        _next(bar, "marking the stain")
-        with warnings.catch_warnings():  # the plan's summary says it
-            warnings.filterwarnings("ignore", message=".*larger than the tool tip")
-            part = mark_stain(mesh, subdivide=args.subdivide, name=stem,
-                              **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
+        part = _marked_part(args, bar, intensity)
         _next(bar, "reach test and planning")
         plan = _unrepeated(lambda: plan_setups(part, params=params))
         _next(bar, "writing")
@@ -312,17 +318,6 @@ def _clean_trial(item):
     return run_trial(machine, plan, params=params, seed=seed)
 
 
-def _json_safe(value):
-    """``value`` with NaN and infinite floats as None (JSON holds neither)."""
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if np.isfinite(value) else None
-    return value
-
-
 def _clean_report(args, results, plan, offline, online) -> tuple[dict, object]:
     """The JSON document and the per-heap table (one row per heap per trial) of a clean run."""
     import pandas as pd
@@ -352,7 +347,7 @@ def _clean_report(args, results, plan, offline, online) -> tuple[dict, object]:
                     "wall_s": round(sum(r.wall_s for r in results), 2)},
         "trials": trials,
     }
-    return _json_safe(doc), table
+    return json_safe(doc), table
 
 
 def cmd_clean(args) -> int:
@@ -366,7 +361,7 @@ def cmd_clean(args) -> int:
 
     stem = Path(args.mesh).stem
     out, csv = _outputs(args, args.mesh, f"{stem}_clean", "csv", suffix="json")
-    html = _replay_output(args, out, csv)
+    html = _replay_output(args, args.mesh, out, csv)
     offline, online, seeds = _clean_setup(args)
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "inspection plan", "cleaning trials", "writing"], args.quiet)
@@ -400,12 +395,13 @@ def cmd_clean(args) -> int:
     return 0
 
 
-def _replay_output(args, out: Path, csv: Path) -> Path:
-    """``clean``'s replay page: ``--html``, else beside the JSON file; checked before any work."""
+def _replay_output(args, source: str, out: Path, csv: Path) -> Path:
+    """``clean``'s or ``scrub``'s replay page: ``--html``, else beside the JSON file; checked
+    before any work."""
     if args.html is not None and not args.html.strip():
         raise ValueError("--html is empty; give a file name")
     html = Path(args.html).expanduser() if args.html is not None else out.with_suffix(".html")
-    for flag, other in (("the input mesh", Path(args.mesh)), ("--out", out), ("--csv", csv)):
+    for flag, other in (("the input mesh", Path(source)), ("--out", out), ("--csv", csv)):
         if html.resolve() == other.resolve():
             raise ValueError(f"--html {html} is {flag}; give another file name")
     return _checked_output("--html", html)
@@ -419,6 +415,80 @@ def _replay_page(result, machine, path: Path) -> None:
         from html import escape
 
         path.write_text(f"<!DOCTYPE html><title>{escape(machine.name)}</title><p>No replay: {escape(result.reason)}</p>\n")
+
+
+#: ``scrub --operation`` -> the part whose operating parameters Kabir et al. report (Sec. IX-C)
+OPERATIONS = ("hull", "bowl")
+
+
+def _scrub_cell(args):
+    """``scrub``'s cell parameters and operating parameters, checked before any work."""
+    from .params import BimanualCellParams
+    from .scrubbing.holding import check_payload
+    from .scrubbing.run import paper_lissajous
+
+    cell = BimanualCellParams(part_mass=args.mass, max_rounds=args.rounds)
+    check_payload(cell)
+    return cell, paper_lissajous(args.operation)
+
+
+def cmd_scrub(args) -> int:
+    """Kabir et al.'s two-arm cell on a stained part, simulated: plan, hold, scrub, look, re-plan."""
+    from .scrubbing.run import run_part
+    from .seeding import check_seed
+
+    stem = Path(args.part).stem
+    out, csv = _outputs(args, args.part, f"{stem}_scrub", "csv", suffix="json")
+    html = _replay_output(args, args.part, out, csv)
+    intensity = _intensity(args.intensity)
+    check_seed(args.seed)
+    cell, lissajous = _scrub_cell(args)
+    t0 = time.perf_counter()
+    bar = _stage_bar(["loading part", "marking the stain", "planning and scrubbing", "writing"], args.quiet)
+    with bar:
+        part = _marked_part(args, bar, intensity)
+        _next(bar, "planning and scrubbing")
+        run = _unrepeated_run(lambda: run_part(part, fast=args.fast, lissajous=lissajous, seed=args.seed, cell=cell,
+                                               snapshots=False))
+        _next(bar, "writing")
+        with atomic_paths(out, csv, html) as (tmp_out, tmp_csv, tmp_html):
+            run.to_json(tmp_out)
+            _pass_table(run).to_csv(tmp_csv, index=False, float_format="%.6g")
+            run.to_html(tmp_html, cell=cell)
+        _next(bar, "done")
+    for plan in run.plans:
+        print(plan.summary())
+    print(run.summary())
+    print(f"wrote {out}, {csv} and {html} in {time.perf_counter() - t0:.1f} s")
+    if run.status == "no setup":
+        print("mavac scrub: no setup of the cell reaches the stain (the plan's warnings say why)", file=sys.stderr)
+        return NO_PLAN
+    return 0
+
+
+def _unrepeated_run(make_run):
+    """``make_run()``, its warnings shown once each, except those its plans' summaries list
+    (each round re-plans)."""
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        run = make_run()
+    listed = {w for plan in run.plans for w in plan.warnings}
+    for message in dict.fromkeys(str(w.message) for w in seen):
+        if message not in listed:
+            print(f"mavac: warning: {message}", file=sys.stderr)
+    return run
+
+
+def _pass_table(run):
+    """One row per pass: the setup, its pose in the cleaning arm's base frame, its contact measures."""
+    import pandas as pd
+
+    rows = []
+    for s in run.setup_records():
+        x, y, z = s["base_T_part"][:3, 3]
+        for r in s["passes"]:
+            rows.append(dict(setup=s["label"], part_x_m=x, part_y_m=y, part_z_m=z, **r))
+    return pd.DataFrame(rows)
 
 
 def _common(p: argparse.ArgumentParser, *, role: str) -> None:
@@ -460,6 +530,57 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
+def _stain_options(p: argparse.ArgumentParser) -> None:
+    """The stain options of ``setups`` and ``scrub``."""
+    from .geometry.stain_marking import STAIN_GRAMMAR
+
+    p.add_argument("--stain", required=True,
+                   help=f"which faces are stained: {STAIN_GRAMMAR}. A cone (up:30) is the faces whose normal is "
+                        "within the angle of the direction; box and sphere take face centres, in the file's units; "
+                        "colors the stain painted in the file. Example: --stain up:30,down:30,box:0,0,0,50,50,80")
+    p.add_argument("--passes", type=int, choices=(1, 2, 3), default=None,
+                   help="cleaning passes of every stained face (default: from --intensity or the colours, else 1)")
+    p.add_argument("--intensity", default=None,
+                   help=".npy or text file of stain intensities in (0, 1], one per face of the mesh; passes come "
+                        "from it in three equal bands")
+    p.add_argument("--subdivide", action="store_true",
+                   help="split stained triangles larger than the tool tip (1.5 cm^2) before planning")
+
+
+def _scrub_parser(sub, fmt) -> None:
+    """The ``scrub`` subcommand's parser (Kabir et al.'s two-arm cell in simulation)."""
+    from .params import BimanualCellParams
+
+    p = sub.add_parser("scrub", formatter_class=fmt, help="simulated scrubbing of a stained part (Kabir et al.)",
+                       description="Kabir et al.'s execution on your part, simulated in pybullet: one KUKA iiwa "
+                                   "holds the part and presents it at each setup of the plan, the other scrubs "
+                                   "each pass of its plane-slicing tool path under force control with the "
+                                   "Lissajous overlay, a camera measures the stain left after each pass, and "
+                                   "what is left is re-planned. Writes a JSON file (status, setups with the "
+                                   "part's pose in the cleaning arm's base frame, passes, force tracking, duty, "
+                                   "stain removed per setup), a CSV with one row per pass and an HTML replay in "
+                                   "which the stain fades as it is removed. The part should be 5-25 cm across "
+                                   "(the cell's setup square is 30 cm) and is held at the centre of its bottom.")
+    p.add_argument("part", help="part mesh: .stl, .obj, .ply or .dae")
+    _stain_options(p)
+    p.add_argument("--operation", choices=OPERATIONS, default="hull",
+                   help="operating parameters (speed, force, stiffness, Lissajous frequency and amplitude): those "
+                        "Kabir et al. report for their hull or their bowl (Sec. IX-C)")
+    p.add_argument("--mass", type=float, default=BimanualCellParams.part_mass,
+                   help="mass of the part, kg (at most 7, the holding arm's payload; default: a plastic part of "
+                        f"about 20 cm, {BimanualCellParams.part_mass:g} kg)")
+    p.add_argument("--rounds", type=int, default=BimanualCellParams.max_rounds,
+                   help="re-planning rounds for the stain the camera still sees after the plan (0-20)")
+    p.add_argument("--fast", action="store_true",
+                   help="one sampling level, the first setup only, no re-planning: a quick look")
+    p.add_argument("--out", help="JSON result (default: <part>_scrub.json in $MAVAC_OUT or the current directory)")
+    p.add_argument("--csv", help="CSV, one row per pass (default: <part>_scrub.csv beside the JSON file)")
+    p.add_argument("--html", help="meshcat replay: both arms, the part, its stain fading pass by pass (default: "
+                                  "beside the JSON file)")
+    _common(p, role="part")
+    p.set_defaults(func=cmd_scrub)
+
+
 def _clean_parser(sub, fmt) -> None:
     """The ``clean`` subcommand's parser (MAVAC's online loop in simulation)."""
     p = sub.add_parser("clean", formatter_class=fmt, help="simulated cleaning of a machine (MAVAC online stage)",
@@ -489,7 +610,6 @@ def _clean_parser(sub, fmt) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .geometry.stain_marking import STAIN_GRAMMAR
     from .params import SETUP_COVER_METHODS
 
     fmt = _HelpFormatter
@@ -500,7 +620,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "plans for stained parts (Puma 560), and REACH-style reach studies. Every length is in metres "
                     "unless a flag says otherwise.")
     parser.add_argument("--version", action="version", version=f"mavac {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{inspect,setups,reach,clean}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{inspect,setups,reach,clean,scrub}")
 
     p = sub.add_parser("inspect", formatter_class=fmt, help="inspection plan of a machine (MAVAC offline stage)",
                        description="MAVAC's offline computation on your machine: spots for the mobile base, guard "
@@ -521,17 +641,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "(or the paper's depth-first branch and bound with --method dfbnb). The part should be "
                                    "2 cm-2 m across.")
     p.add_argument("part", help="part mesh: .stl, .obj, .ply or .dae")
-    p.add_argument("--stain", required=True,
-                   help=f"which faces are stained: {STAIN_GRAMMAR}. A cone (up:30) is the faces whose normal is "
-                        "within the angle of the direction; box and sphere take face centres, in the file's units; "
-                        "colors the stain painted in the file. Example: --stain up:30,down:30,box:0,0,0,50,50,80")
-    p.add_argument("--passes", type=int, choices=(1, 2, 3), default=None,
-                   help="cleaning passes of every stained face (default: from --intensity or the colours, else 1)")
-    p.add_argument("--intensity", default=None,
-                   help=".npy or text file of stain intensities in (0, 1], one per face of the mesh; passes come "
-                        "from it in three equal bands")
-    p.add_argument("--subdivide", action="store_true",
-                   help="split stained triangles larger than the tool tip (1.5 cm^2) before planning")
+    _stain_options(p)
     p.add_argument("--setup-time", type=float, default=60.0, help="time to re-place the part, s (Kabir Table VI)")
     p.add_argument("--method", choices=SETUP_COVER_METHODS, default="auto",
                    help="auto = the proven optimum (reduction, size bound, enumeration, integer program; node budgets "
@@ -561,17 +671,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_reach)
 
     _clean_parser(sub, fmt)
+    _scrub_parser(sub, fmt)
     return parser
 
 
 #: parameter fields the command line sets -> their flags, to name the flag in an error
 FIELD_FLAGS = {"radius": "--hpr-radius", "surface_spacing": "--spacing", "spacing": "--spacing", "P_s": "--P-s",
-               "P_g": "--P-g", "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed"}
+               "P_g": "--P-g", "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed",
+               "part_mass": "--mass", "max_rounds": "--rounds"}
 
 
 def _with_flag(message: str) -> str:
     """``message`` led by the flag of the parameter it starts with (``radius must be ...``)."""
-    field = re.match(r"(\w+) (must|=)", message)
+    field = re.match(r"(\w+)(?: \(\w+\))? (must|=)", message)
     flag = FIELD_FLAGS.get(field.group(1)) if field else None
     return f"{flag}: {message}" if flag else message
 

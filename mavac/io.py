@@ -14,6 +14,8 @@ import os
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from .validate import ParameterTypeError, check_path
 
 #: folder, beside each target, that holds the temporaries of writes in progress
@@ -117,6 +119,20 @@ def write_text(text: str, path) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_text(text)
     return Path(path)
+
+
+def json_safe(value):
+    """``value`` (dicts, lists, tuples, numbers, arrays) with NaN and infinite floats as None and
+    numpy scalars and arrays as Python numbers and lists (JSON holds neither)."""
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    if isinstance(value, (np.integer, np.bool_)):
+        return value.item()
+    return value
 
 
 def write_json(obj, path) -> Path:

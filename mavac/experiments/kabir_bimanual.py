@@ -4,7 +4,7 @@ the tables and figures.
 The cell and its loop live in :mod:`mavac.scrubbing` (:func:`mavac.scrubbing.run.run_part`,
 :class:`mavac.scrubbing.coupon.CouponCell`). Here: :func:`learn_on_coupon` runs the GPR
 learner (Sec. VIII) with the paper's thresholds on the coupon; the rest tabulates
-(Table VII, ``kabir_execution.csv``) and draws (Figs. 10-13, the meshcat replay) what
+(Table VII, ``kabir_execution.csv``) and draws (Figs. 10-13) what
 :func:`mavac.scrubbing.run.run_part` returned.
 """
 
@@ -14,8 +14,7 @@ import numpy as np
 import pandas as pd
 
 from ..paper import paper_scalar
-from ..params import BimanualCellParams, GPRParams, ToolpathParams
-from ..scrubbing.cell import cell_robots, flange_T_part
+from ..params import GPRParams
 from ..scrubbing.coupon import CouponCell
 from ..scrubbing.gpr import learn_parameters
 from ..scrubbing.lissajous import vector_excursions
@@ -161,52 +160,3 @@ def plot_snapshots(fig, run: PartRun, ncols: int = 4) -> None:
         ax.imshow(img)
         ax.set_title(label, fontsize=8)
         ax.axis("off")
-
-
-def replay_tracks(run: PartRun, cleaner, holder, cell: BimanualCellParams, *, max_keys: int = 400):
-    """Keyframes of the whole run: ``(times (k,) int frames at 30 fps, q_cleaner (k, 7),
-    q_holder (k, 7), world_T_part (k, 4, 4))``, at most ``max_keys`` evenly spaced samples."""
-    import pinocchio as pin
-
-    qc = np.concatenate([c for c, _, _ in run.execution.tracks])
-    qh = np.concatenate([h for _, h, _ in run.execution.tracks])
-    t = np.cumsum(np.concatenate([np.full(len(c), dt) for c, _, dt in run.execution.tracks]))
-    keep = np.unique(np.linspace(0, len(t) - 1, min(max_keys, len(t))).astype(int))
-    frames = np.maximum.accumulate(np.round(t[keep] * 30).astype(int))
-    frames = frames + np.arange(len(frames))  # strictly increasing
-    model, data = holder.model, holder.model.createData()
-    fid = model.getFrameId("flange")
-    parts = []
-    for q in qh[keep]:
-        pin.framesForwardKinematics(model, data, q)
-        parts.append(cell.world_T_holder @ data.oMf[fid].homogeneous @ flange_T_part(cell))
-    return frames, qc[keep], qh[keep], np.array(parts)
-
-
-def replay_html(run: PartRun, path, *, cell: BimanualCellParams = BimanualCellParams(),
-                toolpath: ToolpathParams = ToolpathParams()):
-    """One meshcat HTML replaying the cell: both arms, the part and its tool paths, animated.
-
-    The meshcat server is shut down on exit (also on error or interrupt).
-    """
-    from ..viz import meshcat_scene as ms
-    from ..viz.scenes import robot_tracks
-
-    cleaner, holder = cell_robots(cell, toolpath)
-    frames, qc, qh, parts = replay_tracks(run, cleaner, holder, cell)
-    with ms.scene() as vis:
-        ms.add_robot(vis, "cleaner", cleaner, qc[0], world_T_base=cell.world_T_cleaner)
-        ms.add_robot(vis, "holder", holder, qh[0], world_T_base=cell.world_T_holder)
-        ms.add_mesh(vis, "part", run.state.mesh, color=(0.85, 0.85, 0.8), world_T_mesh=parts[0])
-        stained = run.state.mesh.submesh([np.flatnonzero(run.state.initial > 0)], append=True)
-        ms.add_mesh(vis, "part/stain", stained, color=(0.45, 0.3, 0.15))
-        for i, (T, pts) in enumerate(run.execution.paths):
-            ms.add_lines(vis, f"paths/{i}", pts[:-1], pts[1:], color=(0.9, 0.1, 0.1))
-        tracks = {**robot_tracks(cleaner, "cleaner", np.repeat(cell.world_T_cleaner[None], len(qc), 0), qc),
-                  **robot_tracks(holder, "holder", np.repeat(cell.world_T_holder[None], len(qh), 0), qh),
-                  "part": parts}
-        ms.animate(vis, tracks, times=frames, fps=30)
-        ms.frame_camera(vis, [-0.3, -0.6, 0.0], [1.5, 0.6, 1.0])
-        legend = ms.legend_html([((0.9, 0.1, 0.1), "tool path (contact)"), ((0.45, 0.3, 0.15), "stain (initial)")],
-                                title=f"{run.name}: SIMULATED two-arm cell replay")
-        return ms.save_html(vis, path, legend=legend)

@@ -22,6 +22,17 @@ from ..setups.setup_plan import SetupPlan, plan_setups
 from ..validate import check_instance, check_points
 from .cell import ArmClearance, holder_ik
 
+#: Rated payload of the holding arm, kg: KUKA LBR iiwa 7 R800 datasheet (7 kg); the part and its
+#: adapter must weigh no more.
+HOLDER_PAYLOAD_KG = 7.0
+
+
+def check_payload(params: BimanualCellParams) -> None:
+    """ValueError when ``params.part_mass`` is over the holding arm's rated payload."""
+    if params.part_mass > HOLDER_PAYLOAD_KG:
+        raise ValueError(f"part_mass must be at most {HOLDER_PAYLOAD_KG:g} kg, the holding arm's rated payload "
+                         f"(KUKA LBR iiwa 7 R800), got {params.part_mass:g} kg: the cell cannot hold this part")
+
 
 class HeldSetups:
     """``feasible(setups (k, 3)) -> (k,) bool`` for a part held by the cell's holding arm.

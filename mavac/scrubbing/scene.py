@@ -196,6 +196,19 @@ def setup_motion_checker(cell: TwoArmCell) -> CollisionChecker:
     return cell.setup_checker
 
 
+class SetupMotionError(RuntimeError):
+    """No collision-free motion of the holding arm to a setup (OMPL's reason in the message)."""
+
+
+def check_held_start(cell: TwoArmCell, part_mesh) -> None:
+    """ValueError when the part, held at the holding arm's start configuration, already hits
+    the floor, the parked cleaning arm or the holding arm: too large for the cell."""
+    if not setup_motion_checker(cell).is_free(cell.holder.q()):
+        size = " x ".join(f"{e:.2f}" for e in part_mesh.extents)
+        raise ValueError(f"part ({size} m) is too large for the cell: held at the holding arm's start pose it hits "
+                         "the floor, the parked cleaning arm or the holding arm itself")
+
+
 def setup_motion_path(cell: TwoArmCell, q_goal, *, seed: int = 0):
     """Collision-free joint path of the holding arm (with the part) to ``q_goal``: RRT-Connect
     against the parked cleaning arm's box and the floor, self-collision included, within
@@ -203,14 +216,14 @@ def setup_motion_path(cell: TwoArmCell, q_goal, *, seed: int = 0):
 
     Returns
     -------
-    (k, 7) float path, or raises ``RuntimeError`` with OMPL's reason.
+    (k, 7) float path, or raises :class:`SetupMotionError` with OMPL's reason.
     """
     params = cell.params
     res = plan_rrt_connect(setup_motion_checker(cell).is_free, cell.holder.q(), np.asarray(q_goal, float),
                            cell.holder_model.q_lower, cell.holder_model.q_upper, seed=seed,
                            max_iterations=params.setup_rrt_iterations, time_limit=params.setup_rrt_time_limit)
     if not res.solved:
-        raise RuntimeError(f"no collision-free setup motion of the holding arm: {res.reason}")
+        raise SetupMotionError(f"no collision-free setup motion of the holding arm: {res.reason}")
     return res.path
 
 

@@ -445,6 +445,12 @@ class Execution:
     tracks : list of (q_cleaner (k, 7), q_holder (k, 7), dt)
         Replay samples for the meshcat animation, ``dt`` s apart.
     paths : list of (world_T_part, (k, 3) contact path points)
+    stain_states : list of (int, (F,) float)
+        After each pass: how many of ``tracks`` it ends, and the stain thickness per face.
+    setups : list of dict
+        One per executed setup: ``label``, ``world_T_part`` (4, 4) as the part was met (world =
+        the cleaning arm's base frame), ``q_holder`` (7,) rad, ``patches`` (int), ``first_row``
+        (its first entry in ``rows``), ``stain_before`` (F,) thickness when it began.
     """
 
     rows: list = field(default_factory=list)
@@ -454,6 +460,8 @@ class Execution:
     stain_images: list = field(default_factory=list)
     tracks: list = field(default_factory=list)
     paths: list = field(default_factory=list)
+    stain_states: list = field(default_factory=list)
+    setups: list = field(default_factory=list)
 
 
 def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainState, lissajous: LissajousParams,
@@ -488,6 +496,8 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
     _keep(out, cell, "holder")
     fix_part(cell)
     T = world_T_part(cell)
+    out.setups.append(dict(label=label, world_T_part=T, q_holder=np.asarray(q_holder, float).copy(),
+                           patches=len(patches), first_row=len(out.rows), stain_before=state.thickness.copy()))
     tp = toolpath_for_setup(part, T, np.asarray(patches), toolpath, reachable=reachable_from_robot(cell.cleaner_model))
     if snapshot is not None:
         out.snapshots.append((f"{label} before cleaning", snapshot(cell, state)))
@@ -506,6 +516,7 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
                            REPLAY_EVERY * cell.world.time_step))
         before = state.thickness.copy()
         state.scrub(log.removal, rng)
+        out.stain_states.append((len(out.tracks), state.thickness.copy()))
         seen = perceive(state, before, part.stain_faces[pp.patch_ids], rng)
         state.images.append(seen)
         out.forces.append(log.normal_force[log.in_contact & log.commanded_contact])
