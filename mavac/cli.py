@@ -27,7 +27,7 @@ import numpy as np
 
 from . import __version__
 from .config import cache_dir, user_output_dir
-from .io import atomic_paths, json_safe
+from .io import atomic_paths, json_safe, write_json
 
 #: exit status of a run that ended without a plan (its files say why); 1 is bad input, 130 Ctrl-C
 NO_PLAN = 3
@@ -221,6 +221,31 @@ def _marked_part(args, bar, intensity):
                           **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
 
 
+#: what the poses of a setup or scrub JSON file mean
+POSE_FRAMES = ("base_T_part: the part frame (bounding-box bottom centre, z up) in the robot's base frame; "
+               "base_T_file: the mesh file's own frame (after --units and --up) in the robot's base frame; metres")
+
+
+def _file_poses(base_T_parts, part) -> list:
+    """``base_T_file`` of each ``base_T_part`` (k, 4, 4): the mesh file's frame (after ``--units``
+    and ``--up``) in the robot's base frame, so a real cell can place the part from its file."""
+    part_T_file = np.eye(4)
+    part_T_file[:3, 3] = -np.asarray(part.mesh.metadata.get("mavac_part_offset", np.zeros(3)), dtype=float)
+    return [np.asarray(T, dtype=float) @ part_T_file for T in base_T_parts]
+
+
+def _setups_doc(plan, part, params) -> dict:
+    """The setup plan's JSON, each setup with its full pose (``base_T_part``, ``base_T_file``)."""
+    from .setups.reach import base_T_part
+
+    doc = plan.to_dict()
+    poses = base_T_part(plan.setups, params.space) if len(plan.setups) else []
+    for setup, T, T_file in zip(doc["setups"], poses, _file_poses(poses, part)):
+        setup["base_T_part"], setup["base_T_file"] = T.tolist(), T_file.tolist()
+    doc["frames"] = POSE_FRAMES
+    return doc
+
+
 def cmd_setups(args) -> int:
     """Kabir et al. setup plan of a stained part: fewest, fastest setups on the Puma 560."""
     from .params import ReachParams, SetupPlanParams, SetupPlannerParams
@@ -243,7 +268,7 @@ def cmd_setups(args) -> int:
         plan = _unrepeated(lambda: plan_setups(part, params=params))
         _next(bar, "writing")
         with atomic_paths(out, js) as (tmp_out, tmp_js):
-            plan.to_json(tmp_js)
+            write_json(_setups_doc(plan, part, params), tmp_js)
             plan.to_html(tmp_out, part, params=params)
         _next(bar, "done")
     print(f"{stem}: stain of {len(part.stain_faces)} patches, {part.patch_areas.sum() * 1e4:.1f} cm^2, "
@@ -452,7 +477,7 @@ def cmd_scrub(args) -> int:
                                                snapshots=False))
         _next(bar, "writing")
         with atomic_paths(out, csv, html) as (tmp_out, tmp_csv, tmp_html):
-            run.to_json(tmp_out)
+            write_json(_scrub_doc(run, part), tmp_out)
             _pass_table(run).to_csv(tmp_csv, index=False, float_format="%.6g")
             run.to_html(tmp_html, cell=cell)
         _next(bar, "done")
@@ -464,6 +489,15 @@ def cmd_scrub(args) -> int:
         print("mavac scrub: no setup of the cell reaches the stain (the plan's warnings say why)", file=sys.stderr)
         return NO_PLAN
     return 0
+
+
+def _scrub_doc(run, part) -> dict:
+    """The run's JSON, each setup with the mesh file's pose too (``base_T_file``)."""
+    doc = run.to_dict()
+    for setup, T_file in zip(doc["setups"], _file_poses([s["base_T_part"] for s in doc["setups"]], part)):
+        setup["base_T_file"] = T_file.tolist()
+    doc["frame"] += "; base_T_file: the mesh file's own frame (after --units and --up) in the same base frame"
+    return doc
 
 
 def _unrepeated_run(make_run):

@@ -102,6 +102,14 @@ def test_setups_plans_a_stained_part(files, tmp_path, capsys):
     assert covered + plan["uncoverable"] == sorted(covered + plan["uncoverable"])
     assert "setup 1:" in out and "passes [0, " in out
     assert "mavac-legend" in (tmp_path / "dome.html").read_text()
+    # full poses: the part frame and the file's frame (the dome's centre, 6 cm above its bottom)
+    from mavac.params import SetupPlanParams
+    from mavac.setups.reach import base_T_part
+
+    for setup in plan["setups"]:
+        T = base_T_part(np.array([[setup["x"], setup["y"], setup["alpha"]]]), SetupPlanParams().space)[0]
+        assert np.allclose(setup["base_T_part"], T)
+        assert np.allclose(setup["base_T_file"], T @ trimesh.transformations.translation_matrix([0, 0, 0.06]))
 
 
 def test_setups_method_dfbnb_is_the_papers_search_without_a_certificate(files, tmp_path, capsys):
@@ -150,7 +158,7 @@ def test_interrupt_exits_130_and_leaves_no_file(files, tmp_path, capsys, monkeyp
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("command", ["inspect", "setups", "reach", "clean"])
+@pytest.mark.parametrize("command", ["inspect", "setups", "reach", "clean", "scrub"])
 def test_help_gives_units_and_defaults(command, capsys):
     with pytest.raises(SystemExit) as exit_:
         cli.main([command, "--help"])
@@ -172,7 +180,7 @@ def test_python_dash_m_runs_the_command_line(files, tmp_path):
 def _parsed(monkeypatch, argv) -> argparse.Namespace:
     """The namespace ``main`` hands a command (the command itself replaced by a recorder)."""
     seen = {}
-    for name in ("cmd_inspect", "cmd_setups", "cmd_reach", "cmd_clean"):
+    for name in ("cmd_inspect", "cmd_setups", "cmd_reach", "cmd_clean", "cmd_scrub"):
         monkeypatch.setattr(cli, name, lambda args: seen.setdefault("args", args) and 0)
     assert cli.main(argv) == 0
     return seen["args"]
@@ -472,3 +480,64 @@ def test_setups_refuses_patches_only_a_colliding_arm_reaches_and_says_how_many(t
     plan = json.loads((tmp_path / "off.json").read_text())
     assert code == 0 and plan["uncoverable"] == [] and plan["collision_refused"] == 0  # IK alone: through the neck
     assert "collision check on" not in out
+
+
+# ---- mavac scrub: Kabir's two-arm cell on a user's part ----------------------------------------------
+
+@pytest.fixture(scope="module")
+def scrubbed(files, tmp_path_factory):
+    """The 12 cm dome (millimetres), its top stained, through the cell in fast mode."""
+    d = tmp_path_factory.mktemp("scrub")
+    code = cli.main(["scrub", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--fast", "--quiet",
+                     "--out", str(d / "run.json")])
+    return d, code
+
+
+def test_scrub_writes_poses_passes_and_a_fading_replay(scrubbed):
+    d, code = scrubbed
+    assert code == 0
+    assert sorted(p.name for p in d.iterdir()) == ["run.csv", "run.html", "run.json"]  # --out's stem
+    doc = _strict_json(d / "run.json")
+    assert doc["simulated"] is True and doc["status"] in ("clean", "residue left") and doc["part"] == "dome"
+    assert doc["operation"]["f_n"] > 0 and doc["setups"]
+    table = pd.read_csv(d / "run.csv")
+    assert len(table) == sum(len(s["passes"]) for s in doc["setups"]) > 0
+    for column in ("setup", "part_x_m", "pass", "duty", "force_error_all", "nonpad_part_steps", "arm_arm_steps"):
+        assert column in table.columns
+    assert ((0 <= table["duty"]) & (table["duty"] <= 1)).all()
+    for setup in doc["setups"]:
+        T = np.array(setup["base_T_part"])
+        assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-6) and np.allclose(T[3], [0, 0, 0, 1])
+        # the dome's file origin is its centre, 6 cm above the part frame's origin
+        assert np.allclose(setup["base_T_file"], T @ trimesh.transformations.translation_matrix([0, 0, 0.06]))
+        assert len(setup["q_holder"]) == 7
+    # the stain removed per setup adds up to the whole run's
+    assert sum(s["stain_removed"] for s in doc["setups"]) == pytest.approx(doc["stain_removed"])
+    html = (d / "run.html").read_text()
+    assert "mavac-legend" in html and "fades" in html
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--mass", "9"], "--mass: part_mass must be at most 7 kg, the holding arm's rated payload"),
+    (["--mass", "-1"], "--mass: part_mass must be in"),
+    (["--mass", "nan"], "--mass: part_mass (BimanualCellParams) must be finite"),
+    (["--rounds", "21"], "--rounds: max_rounds must be in [0, 20]"),
+    (["--seed", "-3"], "--seed: seed must be in"),
+    (["--out", "{mesh}"], "--out {mesh} is the input mesh"),
+    (["--out", "{tmp}/r.json", "--html", "{tmp}/r.json"], "--html {tmp}/r.json is --out"),
+])
+def test_scrub_refuses_bad_input_before_any_work(files, tmp_path, capsys, no_compute, argv, message):
+    mesh = str(files / "dome.ply")
+    argv = [a.format(mesh=mesh, tmp=tmp_path) for a in argv]
+    out = [] if "--out" in argv else ["--out", str(tmp_path / "x.json")]
+    code, _, err = run(["scrub", mesh, "--units", "mm", "--stain", "up:60", "--quiet", *out, *argv], capsys)
+    assert code == 1 and err.startswith(f"mavac scrub: error: {message.format(mesh=mesh, tmp=tmp_path)}"), err
+    assert "Traceback" not in err and not list(tmp_path.iterdir())
+
+
+def test_scrub_refuses_a_part_too_large_for_the_cell(tmp_path, capsys):
+    trimesh.creation.box([0.6, 0.6, 0.2]).export(tmp_path / "crate.stl")
+    code, _, err = run(["scrub", str(tmp_path / "crate.stl"), "--stain", "up:30", "--fast", "--quiet",
+                        "--out", str(tmp_path / "out" / "c.json")], capsys)
+    assert code == 1 and "mavac scrub: error: part (0.60 x 0.60 x 0.20 m) is too large for the cell" in err, err
+    assert "Traceback" not in err and not (tmp_path / "out").exists()

@@ -128,6 +128,35 @@ def test_run_part_validates_its_parameters_before_loading_anything():
         run_part("bowl", fast=True, lissajous=(0.3, 10.0, 5000.0, 7.0, 30.0))
     with pytest.raises(ValueError, match="seed"):
         run_part("bowl", fast=True, seed=-1)
+    with pytest.raises(ValueError, match=r"part_mass must be at most 7 kg, the holding arm's rated payload"):
+        run_part("bowl", fast=True, cell=BimanualCellParams(part_mass=7.5))
+
+
+def test_run_part_takes_a_users_part_only_with_its_operating_parameters():
+    import trimesh
+
+    from mavac.geometry.stain_marking import mark_stain
+    from mavac.scrubbing.run import run_part
+
+    part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 60))
+    with pytest.raises(ValueError, match="lissajous is required for a user's part"):
+        run_part(part, fast=True)
+    with pytest.raises(TypeError, match="part must be a part name"):
+        run_part(part.mesh, fast=True)
+
+
+def test_a_setup_the_holding_arm_cannot_reach_is_skipped_with_a_note(monkeypatch):
+    import mavac.scrubbing.run as run_module
+    from mavac.scrubbing.scene import SetupMotionError
+
+    def unreachable(*args, label, **kwargs):
+        raise SetupMotionError("no collision-free setup motion of the holding arm: test")
+
+    monkeypatch.setattr(run_module, "execute_setup", unreachable)
+    run = run_module.run_part("hull", fast=True, snapshots=False)
+    assert run.status == "no setup" and not run.execution.rows
+    assert run.notes == ["round 0 setup 1 skipped: no collision-free setup motion of the holding arm: test"]
+    assert run.stain_removed == 0.0 and run.to_dict()["setups"] == []
 
 
 def test_cell_gains_limits_and_masses_are_parameters():

@@ -192,6 +192,7 @@ def run_part(part: str | Part, *, fast: bool, lissajous: LissajousParams | None 
                 break
             setups = plan.setups[:1] if fast else plan.setups
             qs = setup_configurations(HeldSetups(cleaner, holder, part.mesh, cell), setups, sim.holder.q())
+            passes_before = len(out.rows)
             for j, (q, patches) in enumerate(zip(qs, plan.patches)):
                 try:
                     execute_setup(sim, current, patches, q, state, lissajous, toolpath, rng, out,
@@ -199,6 +200,8 @@ def run_part(part: str | Part, *, fast: bool, lissajous: LissajousParams | None 
                                   seed=int_seed(seed, "kabir setup motion", rounds, j))
                 except SetupMotionError as exc:  # raised before the setup touches anything
                     notes.append(f"round {rounds} setup {j + 1} skipped: {exc}")
+            if len(out.rows) == passes_before:  # nothing scrubbed, nothing new to look at
+                break
             last = state.images[-1]
             left, unseen = residue_faces(state, last["mask"], part.stain_faces)
             if last["residue_fraction"] <= cell.clean_residue or rounds >= cell.max_rounds or len(left) == 0:
