@@ -22,9 +22,9 @@ STAIN_LEVELS = ((0.02, (0.80, 0.66, 0.45)), (1 / 3, (0.62, 0.42, 0.22)), (2 / 3,
 #: Offset of each shell along the face normals, metres per level (ours: above depth-buffer noise
 #: at the page's framing, below what the eye reads as a gap).
 SHELL_STEP = 4e-4
-#: Half-size of the box the page opens on, around the part's positions, metres (ours: the part
-#: and the pad's approach fill the view; the arms reach out of it).
-FRAME_MARGIN = 0.3
+#: The page opens on the part's positions plus this many bounding radii of the part around them
+#: (ours: the part fills about a third of the view, the pad's approach and the wrists show).
+FRAME_RADII = 2.0
 FPS = 30
 PATH_COLOR = (0.9, 0.1, 0.1)
 PART_COLOR = (0.85, 0.85, 0.8)
@@ -130,7 +130,8 @@ def replay_html(run, path, *, cell: BimanualCellParams = BimanualCellParams(),
                   "part": parts}
         ms.animate(vis, tracks, times=frames, fps=FPS, hide_at=hide)
         centres = parts[:, :3, 3]
-        ms.frame_camera(vis, centres.min(axis=0) - FRAME_MARGIN, centres.max(axis=0) + FRAME_MARGIN)
+        margin = FRAME_RADII * float(np.linalg.norm(run.state.mesh.extents)) / 2.0
+        ms.frame_camera(vis, centres.min(axis=0) - margin, centres.max(axis=0) + margin)
         entries = [(PATH_COLOR, "tool path (contact)")]
         entries += [(c, f"stain above {lv:.2g} of a full layer") for lv, c in reversed(STAIN_LEVELS)]
         legend = ms.legend_html(entries, title=f"{run.name}: SIMULATED two-arm cell, {run.status}, "
