@@ -1,5 +1,5 @@
-"""Command line: ``mavac inspect``, ``mavac setups``, ``mavac reach``, ``mavac clean`` (also
-``python -m mavac``).
+"""Command line: ``mavac inspect``, ``mavac setups``, ``mavac reach``, ``mavac clean``, ``mavac
+scrub`` (also ``python -m mavac``).
 
 From a mesh file to a result a person can read without the source: an HTML page (framed, with a
 legend, the robot animated), a JSON or CSV file, and a summary on the terminal that names the
@@ -651,7 +651,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="mavac", formatter_class=fmt,
         description="Plan robotic cleaning from a mesh: MAVAC inspection plans for machines (UR10 on a mobile "
                     "base, camera on the tool), MAVAC's simulated cleaning of those machines, Kabir et al. setup "
-                    "plans for stained parts (Puma 560), and REACH-style reach studies. Every length is in metres "
+                    "plans for stained parts (Puma 560) and their simulated two-arm scrubbing, and REACH-style "
+                    "reach studies. Every length is in metres "
                     "unless a flag says otherwise.")
     parser.add_argument("--version", action="version", version=f"mavac {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="{inspect,setups,reach,clean,scrub}")

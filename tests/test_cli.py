@@ -541,3 +541,55 @@ def test_scrub_refuses_a_part_too_large_for_the_cell(tmp_path, capsys):
                         "--out", str(tmp_path / "out" / "c.json")], capsys)
     assert code == 1 and "mavac scrub: error: part (0.60 x 0.60 x 0.20 m) is too large for the cell" in err, err
     assert "Traceback" not in err and not (tmp_path / "out").exists()
+
+
+def test_scrub_interrupted_exits_130_and_leaves_no_file(files, tmp_path, capsys, monkeypatch):
+    import mavac.scrubbing.run as run_module
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run_module, "run_part", interrupted)
+    code, _, err = run(["scrub", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
+                        "--out", str(tmp_path / "s.json")], capsys)
+    assert code == 130 and "interrupted" in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())
+
+
+def _documented_commands() -> list[list[str]]:
+    """Every ``mavac ...`` line of the README's and docs/cli.md's shell blocks, as argv."""
+    import re
+    import shlex
+
+    root = Path(__file__).resolve().parents[1]
+    lines = []
+    for doc in (root / "README.md", root / "docs" / "cli.md"):
+        for block in re.findall(r"```bash\n(.*?)```", doc.read_text(), flags=re.S):
+            lines += [ln.split("#")[0].strip() for ln in block.splitlines() if ln.startswith("mavac ")]
+    return [shlex.split(ln)[1:] for ln in lines if "--help" not in ln]
+
+
+@pytest.mark.parametrize("argv", _documented_commands(), ids=" ".join)
+def test_every_documented_command_line_parses(monkeypatch, argv):
+    args = _parsed(monkeypatch, argv)
+    assert args.command == argv[0]
+    if getattr(args, "stain", None):
+        from mavac.geometry.stain_marking import parse_stain
+
+        assert parse_stain(args.stain, scale=1.0)
+
+
+def test_the_stain_example_of_the_help_marks_faces(capsys):
+    import re
+
+    from mavac.geometry.stain_marking import mark_stain, parse_stain
+
+    for command in ("setups", "scrub"):
+        with pytest.raises(SystemExit):
+            cli.main([command, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        example = re.search(r"Example: --stain (\S+)", text).group(1)
+        # in millimetres, as the help's box says: a 12 cm dome, its top and bottom inside the box
+        dome = trimesh.creation.icosphere(subdivisions=3, radius=0.06)
+        part = mark_stain(dome, **parse_stain(example, scale=1e-3))
+        assert 0 < len(part.stain_faces) < len(dome.faces)
