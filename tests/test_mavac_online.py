@@ -151,3 +151,37 @@ def test_run_sensitivity_maps_every_point_and_seed_at_once_and_labels_each_run(m
         dimension, value, stand_in = points[k // 2]
         assert (run["dimension"], run["value"], run["stand_in"], run["ran_on"], run["trial"]) == \
             (dimension, value, stand_in, stand_in, (1, 2)[k % 2])
+
+
+def _drawn_tick_labels(axis):
+    """The tick labels a draw placed (reading them through ``get_ticklabels`` would move them back)."""
+    lo, hi = sorted(axis.get_view_interval())
+    locs = axis.get_majorticklocs()
+    return [t.label1 for t in axis.majorTicks[:len(locs)] if lo - 1e-9 <= t.get_loc() <= hi + 1e-9]
+
+
+def test_fig8_tick_labels_do_not_overlap():
+    import matplotlib.pyplot as plt
+
+    from mavac.geometry.machines import load_machine
+
+    runs = []
+    for scene, n in (("test_bench", 146), ("sanding_milling", 156)):  # the paper-scale trial 1 heaps
+        lo, hi = load_machine(scene).mesh.bounds
+        result = TrialResult(scene, 1, np.random.default_rng(0).uniform(lo, hi, (n, 3)), np.arange(n) < 0.8 * n,
+                             np.array([""] * n), detected=n, true_positives=n, recalled=n)
+        runs.append(dict(scene=scene, reading="paper", offline="hpr", trial=1, result=result))
+    fig = mon.plot_fig8(runs)
+    try:
+        fig.set_dpi(120)  # as plots.save writes 05_fig8.png
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        for ax in fig.axes:
+            labels = [lb for axis in (ax.xaxis, ax.yaxis, ax.zaxis) for lb in _drawn_tick_labels(axis)]
+            boxes = [lb.get_window_extent(renderer) for lb in labels if lb.get_visible() and lb.get_text()]
+            assert len(boxes) >= 6  # still two or more ticks per axis
+            clashes = [(labels[i].get_text(), labels[j].get_text()) for i in range(len(boxes))
+                       for j in range(i + 1, len(boxes)) if boxes[i].overlaps(boxes[j])]
+            assert not clashes, (ax.get_title(), clashes)
+    finally:
+        plt.close(fig)

@@ -35,21 +35,20 @@ def test_handler_is_restored_after_the_scene():
 
 
 def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
-    """A SIGINT that arrives while ``meshcat.Visualizer()`` starts its server (before the block
-    that shuts it down) must not leave the server running."""
-    import meshcat
-
+    """A SIGINT that arrives while the server starts (before the block that shuts it down) must
+    not leave the server running."""
     from mavac.viz import meshcat_scene as ms
+    from mavac.viz import meshcat_server
 
-    servers, real = [], meshcat.Visualizer
+    servers, real = [], meshcat_server.start_server
 
-    def starting(*args, **kwargs):
-        vis = real(*args, **kwargs)
-        servers.append(vis.window.server_proc)
+    def starting():
+        proc, url = real()
+        servers.append(proc)
         os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C just as the server is up
-        return vis
+        return proc, url
 
-    monkeypatch.setattr(meshcat, "Visualizer", starting)
+    monkeypatch.setattr(meshcat_server, "start_server", starting)
     # Ctrl-C as a terminal delivers it, even when the tests run as a background job (SIGINT ignored)
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     idle = threading.Event()  # another thread, which a process-wide signal may be handed to
@@ -65,3 +64,31 @@ def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
         for proc in servers:
             if proc.poll() is None:
                 proc.kill()
+
+
+def test_the_server_dies_with_a_parent_killed_outright():
+    """SIGKILL runs no cleanup: the kernel's parent-death signal ends the server."""
+    proc = start(IN_MESHCAT_SCENE)
+    server = None
+    try:
+        server = int(wait_line(proc, "server").split()[-1])
+        assert alive(server)
+        proc.kill()
+        proc.wait(timeout=30)
+        assert gone_within(server, 10), "meshcat server left running after its parent was killed"
+    finally:
+        end(proc)
+        if server is not None and alive(server):
+            os.kill(server, signal.SIGKILL)
+
+
+def test_the_server_listens_on_loopback_only():
+    import psutil
+
+    from mavac.viz import meshcat_scene as ms
+
+    with ms.scene() as vis:
+        listening = [c.laddr for c in psutil.Process(vis.window.server_proc.pid).net_connections(kind="inet")
+                     if c.status == psutil.CONN_LISTEN]
+    assert len(listening) == 2  # ZeroMQ and the web server
+    assert {addr.ip for addr in listening} == {"127.0.0.1"}, listening

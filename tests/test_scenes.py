@@ -133,3 +133,64 @@ def test_hidden_nodes_vanish_at_their_frame_and_bad_frames_are_refused(tmp_path)
     clip = next(a["clip"] for a in anim["animations"] if a["path"] == "/meshcat/heaps/1")
     track = next(t for t in clip["tracks"] if t["name"] == ".visible")
     assert track["type"] == "boolean" and [(k["time"], k["value"]) for k in track["keys"]] == [(0, True), (7, False)]
+
+
+def test_setup_colours_stay_clear_of_the_reserved_colours_and_of_each_other():
+    def clear_of(reserved):
+        for k in range(1, 21):
+            colors = scenes.setup_colors(k)
+            assert colors.shape == (k, 3)
+            assert np.linalg.norm(colors[:, None] - np.array(reserved)[None], axis=2).min() > 0.25, k
+
+    # the setup page's red (unreached stain), grey (clean surface) and table colour mean something else
+    clear_of([scenes.RED, scenes.GREY])
+    clear_of([scenes.WOOD])
+    ten = scenes.setup_colors(10)
+    apart = np.linalg.norm(ten[:, None] - ten[None], axis=2)[np.triu_indices(10, 1)]
+    assert apart.min() > 0.15
+
+
+def test_setup_page_table_reads_as_a_table(tmp_path):
+    from mavac.geometry.stain_marking import mark_stain
+    from mavac.setups.setup_plan import plan_setups
+
+    part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 60), passes=1)
+    cmds = commands(plan_setups(part).to_html(tmp_path / "setups.html", part).read_text())
+    table = next(c for c in cmds if c["type"] == "set_object" and c["path"] == "/meshcat/table")
+    material = table["object"]["materials"][0]
+    rgb = np.array([(material["color"] >> s) & 255 for s in (16, 8, 0)]) / 255
+    assert material.get("opacity", 1.0) >= 0.8  # see-through at 0.35, the brown read grey-violet
+    assert min(np.linalg.norm(rgb - np.array(c)) for c in (scenes.RED, scenes.GREY)) > 0.25
+
+
+def test_reach_page_colour_bar_names_the_quantity_its_unit_and_how_to_read_it(tmp_path):
+    from types import SimpleNamespace
+
+    from mavac.robots.models import ur10_mobile
+
+    robot = ur10_mobile()
+    mesh = trimesh.creation.box(bounds=[[0, 0, 0], [0.6, 0.6, 0.6]])
+    points, normals = mesh.triangles_center, mesh.face_normals
+    score = np.linspace(0.0, 0.008, len(points))
+    study = SimpleNamespace(robot_name="ur10_mobile", score=score, mesh=mesh, points=points, normals=normals,
+                            params=SimpleNamespace(surface_spacing=0.05), candidates=np.array([[-1.0, 0.3, 0.0]]),
+                            best_spot=np.zeros(len(points), int), best_q=np.tile(robot.q_home, (len(points), 1)),
+                            machine_name="box", reach_fraction=float(np.mean(score > 0)), visibility="raycast")
+    html = scenes.reach_study_html(study, tmp_path / "reach.html", robot=robot).read_text()
+    bar = html.split('class="mavac-cbar-label">')[1].split("</div>")[0]
+    assert "maneuverability index" in bar and "dimensionless" in bar
+    assert "higher = better reach" in html
+
+
+def test_plan_page_draws_a_bounded_number_of_camera_triads(plan, tmp_path, monkeypatch):
+    cap = 5
+    assert len(plan.world_T_camera) > cap  # the fixture plan has more poses than this cap
+    monkeypatch.setattr(scenes, "MAX_TRIADS", cap, raising=False)
+    html = scenes.inspection_plan_html(plan, tmp_path / "capped.html").read_text()
+    triads = {c["path"] for c in commands(html)
+              if c["type"] == "set_object" and c["path"].startswith("/meshcat/cameras/")}
+    assert len(triads) == cap
+    h = len(plan.world_T_camera)
+    # first and last pose of T among the drawn ones
+    assert any(p.endswith("_0") for p in triads) and any(p.endswith(f"_{h - 1}") for p in triads)
+    assert f"small triads at {cap} of the {h} cameras" in html

@@ -309,3 +309,21 @@ def test_the_pad_meets_the_exact_concave_part_while_it_is_fixed():
         assert z == pytest.approx(0.005 + 0.008, abs=0.003)
         release_part(cell)
         assert cell.fixed_part is None and cell.scrubbed == cell.part
+
+
+def test_snapshot_camera_faces_the_stain_from_its_side():
+    import trimesh
+
+    from mavac.scrubbing.run import SNAPSHOT_DISTANCE, snapshot_view
+
+    box = trimesh.creation.box([0.1, 0.1, 0.1])
+    side = np.flatnonzero(box.face_normals[:, 0] < -0.9)  # the stain on the -x side
+    world_T_part = np.eye(4)
+    world_T_part[:3, :3] = trimesh.transformations.rotation_matrix(np.pi / 2, [0, 0, 1])[:3, :3]  # -x -> -y
+    world_T_part[:3, 3] = [0.5, 0.0, 0.4]
+    T = snapshot_view(box, side, world_T_part)
+    target = world_T_part[:3, :3] @ box.triangles_center[side].mean(axis=0) + world_T_part[:3, 3]
+    eye, axis = T[:3, 3], T[:3, 2]  # OpenCV camera: z looks forward
+    assert np.linalg.norm(eye - target) == pytest.approx(SNAPSHOT_DISTANCE)
+    assert np.allclose(axis, (target - eye) / np.linalg.norm(target - eye))
+    assert eye[1] < target[1] - 0.3 and eye[2] > target[2]  # from the stain's side (-y), a little above

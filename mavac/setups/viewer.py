@@ -19,12 +19,17 @@ from ..viz.scenes import (
     GREY,
     HOLD_FRAMES,
     RED,
+    WOOD,
     Keys,
     add_colored_mesh,
     robot_tracks,
     setup_colors,
 )
 from .reach import base_T_part
+
+#: the table is nearly opaque (at 0.35 its brown read grey-violet) yet shows the Puma's pedestal
+#: when a large part's table reaches round it
+TABLE_OPACITY = 0.8
 
 
 def _setup_arm(robot, part, patches, base_T_part) -> np.ndarray:
@@ -76,7 +81,7 @@ def setup_plan_html(plan, part, path, robot=None, params=None):
     lo = [space.origin_x + space.x_min - r, space.origin_y + space.y_min - r, floor]
     hi = [space.origin_x + space.x_max + r, space.origin_y + space.y_max + r, space.table_z]
     with ms.scene() as vis:
-        ms.add_mesh(vis, "table", trimesh.creation.box(bounds=[lo, hi]), color=(0.55, 0.45, 0.35), opacity=0.35)
+        ms.add_mesh(vis, "table", trimesh.creation.box(bounds=[lo, hi]), color=WOOD, opacity=TABLE_OPACITY)
         add_colored_mesh(vis, "part", part.mesh, face_rgb, Ts[0])
         ms.add_robot(vis, "robot", robot, robot.q_home)
         if k:
@@ -94,7 +99,7 @@ def setup_plan_html(plan, part, path, robot=None, params=None):
                                f"{math.degrees(s[2]):.0f} deg, {len(plan.patches[j])} patches")
                    for j, s in enumerate(plan.setups)]
         entries += [(RED, f"stain no setup reaches ({len(plan.uncoverable)} patches)"), (GREY, "clean surface"),
-                    ((0.55, 0.45, 0.35), "table (top at the Puma's shoulder height)")]
+                    (WOOD, "table (top at the Puma's shoulder height)")]
         cert = ("no certificate" if plan.certificate_cost is None
                 else f"proven optimum {plan.certificate_cost:.0f} s")
         title = (f"{plan.part_name}: no solution" if plan.status == "no_solution" else

@@ -1,11 +1,11 @@
 """meshcat scenes of machines, parts and robots, exported as self-contained static HTML.
 
-``meshcat.Visualizer()`` starts a server subprocess in its own session (so no signal to our
-process group reaches it); :func:`scene` always terminates it (``Visualizer.close`` is broken
-in meshcat 0.3.2: its window has no ``close``), so no test or notebook leaves a server running:
-on an error, on Ctrl-C (SIGINT) and on SIGTERM (what ``kill`` and ``timeout`` send). It
-swallows the server URL meshcat prints (the server is gone once the file is written, so the
-URL would be a dead link).
+:func:`scene` starts meshcat's server in its own session (so no signal to our process group
+reaches it), listening on 127.0.0.1 only and dying with our process (:mod:`.meshcat_server`),
+and always terminates it (``Visualizer.close`` is broken in meshcat 0.3.2: its window has no
+``close``), so no test or notebook leaves a server running: on an error, on Ctrl-C (SIGINT), on
+SIGTERM (what ``kill`` and ``timeout`` send) and on SIGKILL. It swallows the server URL meshcat
+prints (the server is gone once the file is written, so the URL would be a dead link).
 
 The exported page opens on a camera that frames the scene (:func:`frame_camera`), can hide
 layers until the reader ticks them in the controls (:func:`set_visible`), carries a legend of
@@ -101,14 +101,22 @@ def scene():
     """A fresh meshcat visualizer whose server is shut down on exit: on error, SIGINT and
     SIGTERM too (:func:`sigterm_as_interrupt`), also when they arrive while it starts.
 
-    meshcat's server (``python -m meshcat.servers.zmqserver``) takes no address: its ZeroMQ
-    socket listens on 127.0.0.1, its web server on every interface for the seconds it runs.
+    The server (:mod:`mavac.viz.meshcat_server`) listens on 127.0.0.1 only and dies with this
+    process even when it is killed outright, which runs no ``finally``.
     """
     import meshcat
 
+    from .meshcat_server import start_server
+
     with sigterm_as_interrupt(), _signals_held() as release:
-        with contextlib.redirect_stdout(io.StringIO()):  # the URL of a server that will not outlive us
-            vis = meshcat.Visualizer()
+        proc, zmq_url = start_server()
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):  # the URL of a server that will not outlive us
+                vis = meshcat.Visualizer(zmq_url=zmq_url)
+        except BaseException:
+            _stop(proc)
+            raise
+        vis.window.server_proc = proc  # what shutdown() ends
         try:
             release()  # a Ctrl-C that came while the server started acts here
             yield vis
@@ -119,16 +127,24 @@ def scene():
 def shutdown(vis) -> None:
     """Terminate the meshcat server subprocess of ``vis`` and close its socket."""
     window = vis.window
-    proc = getattr(window, "server_proc", None)
     with contextlib.suppress(Exception):
         window.zmq_socket.close(linger=0)
-    if proc is not None and proc.poll() is None:
+    proc = getattr(window, "server_proc", None)
+    if proc is not None:
+        _stop(proc)
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """Terminate (then kill) a server process and release its pipe."""
+    if proc.poll() is None:
         proc.terminate()
         try:
             proc.wait(timeout=5)
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(timeout=5)
+    if proc.stdout is not None:
+        proc.stdout.close()
 
 
 def add_mesh(vis, name: str, mesh, color=(0.7, 0.7, 0.7), opacity: float = 1.0, world_T_mesh=None) -> None:

@@ -88,3 +88,22 @@ def set_equal_3d(ax, lo, hi):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
+
+
+def sparse_3d_ticks(ax, nbins: int = 4):
+    """At most ``nbins + 1`` round ticks per axis of a 3-D axis, none at the ends of x and y.
+
+    matplotlib's default (up to 9 ticks) overlaps its labels on a panel a few inches wide, and a
+    tick at an end of x shares the box's corner with the tick at an end of y.
+
+    Parameters
+    ----------
+    ax : mpl_toolkits.mplot3d.Axes3D
+        Limits already set (e.g. by :func:`set_equal_3d`).
+    nbins : int, >= 1
+        Most tick intervals per axis (:class:`matplotlib.ticker.MaxNLocator`).
+    """
+    for axis, (lo, hi) in zip((ax.xaxis, ax.yaxis, ax.zaxis), (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())):
+        ticks = mpl.ticker.MaxNLocator(nbins=nbins, steps=[1, 2, 5, 10]).tick_values(lo, hi)
+        margin = 0.05 * (hi - lo) if axis is not ax.zaxis else -1e-9 * (hi - lo)  # z's ends meet no other labels
+        axis.set_ticks(ticks[(ticks > lo + margin) & (ticks < hi - margin)])

@@ -20,6 +20,8 @@ from . import meshcat_scene as ms
 
 GREEN, RED, GREY = (0.1, 0.7, 0.2), (0.9, 0.1, 0.1), (0.75, 0.75, 0.78)
 BLUE, ORANGE, LIGHT_GREEN = (0.1, 0.3, 0.9), (1.0, 0.5, 0.0), (0.1, 0.8, 0.1)
+#: the setup-plan page's table: a wood brown, apart from the part's grey and the setup colours
+WOOD = (0.62, 0.47, 0.30)
 #: frames (at :data:`FPS`) per arm motion, per metre of base travel, and held at each pose; an arm
 #: motion gets a key every :data:`ARM_KEY_STEP` frames (three.js interpolates between keys)
 ARM_FRAMES, BASE_FRAMES_PER_M, HOLD_FRAMES, FPS, ARM_KEY_STEP = 15, 12, 10, 30, 3
@@ -103,13 +105,29 @@ def frame_box(lo, hi, points=()):
     return allp.min(axis=0), allp.max(axis=0)
 
 
+#: Ours: an inspection page draws at most this many camera triads (a plan has ~110 poses, too
+#: many triads to read)
+MAX_TRIADS = 30
+
+
+def _camera_triads(vis, plan) -> int:
+    """Small triads at up to :data:`MAX_TRIADS` camera poses, spread evenly along the ordered pose
+    set T (first and last included); returns how many were drawn."""
+    h = len(plan.world_T_camera)
+    chosen = np.unique(np.round(np.linspace(0, h - 1, min(h, MAX_TRIADS))).astype(int))
+    for i in chosen:
+        ms.add_triad(vis, f"cameras/{plan.pose_kind[i]}_{i}", plan.world_T_camera[i], length=0.08)
+    return len(chosen)
+
+
 def inspection_plan_html(plan, path, robot=None):
     """Meshcat page of an :class:`~mavac.inspection.inspection_plan.InspectionPlan`.
 
     Shows the machine, observed (green) and unobserved (red) elements of S, the spots (large RGB
-    triads) and camera poses (small triads; NoS guards also as orange dots), and the robot going
-    through T (base moves, then arm moves); guard rays (blue) and the best gateways' rays (light
-    green) are hidden layers. The legend gives C and O with the visibility method.
+    triads) and camera poses (small triads at up to :data:`MAX_TRIADS` of them; NoS guards also as
+    orange dots), and the robot going through T (base moves, then arm moves); guard rays (blue)
+    and the best gateways' rays (light green) are hidden layers. The legend gives C and O with the
+    visibility method.
     """
     robot = load_robot(plan.robot_name) if robot is None else robot
     spots = np.asarray(plan.spots, float).reshape(-1, 3)
@@ -121,8 +139,7 @@ def inspection_plan_html(plan, path, robot=None):
         ms.add_points(vis, "surface", plan.points, colors, size=0.02)
         for i, T in enumerate(world_T_spots):
             ms.add_triad(vis, f"spots/{i}", T, length=0.3)
-        for i, T in enumerate(plan.world_T_camera):
-            ms.add_triad(vis, f"cameras/{plan.pose_kind[i]}_{i}", T, length=0.08)
+        drawn = _camera_triads(vis, plan)
         guard = plan.pose_kind == "guard"
         if guard.any():
             ms.add_lines(vis, "guard_rays", plan.world_T_camera[guard, :3, 3],
@@ -154,7 +171,8 @@ def inspection_plan_html(plan, path, robot=None):
              (LIGHT_GREEN, "best gateway rays of a NoS cluster (hidden layer)")],
             title=f"{plan.machine_name}: C = {plan.C:.2f}, O = {plan.O:.2f} ({plan.visibility} visibility)",
             notes=[f"{plan.n_spots} spots (large RGB triads), {plan.n_guards} guards + {plan.n_nos_guards} NoS "
-                   "guards (small triads at the camera, x = optical axis)",
+                   f"guards; small triads at {drawn} of the {len(plan.world_T_camera)} cameras, evenly along T "
+                   "(x = optical axis)",
                    "the robot plays the pose set T: base moves, then arm; replay under Animations",
                    "hidden layers: tick guard_rays / gateways under Scene in the controls"])
         return ms.save_html(vis, path, legend=legend)
@@ -176,10 +194,33 @@ def add_colored_mesh(vis, name, mesh, face_rgb, world_T_mesh=None):
         vis[name].set_transform(np.asarray(world_T_mesh, float))
 
 
+def _setup_palette(reserved, margin: float = 0.3, apart: float = 0.2) -> np.ndarray:
+    """matplotlib's tab10 then Dark2, without the colours within ``margin`` (RGB distance) of a
+    ``reserved`` one and those within ``apart`` of a colour already kept: (m, 3)."""
+    kept = []
+    for c in [c[:3] for name in ("tab10", "Dark2") for c in matplotlib.colormaps[name].colors]:
+        near = [np.linalg.norm(np.subtract(c, r)) for r in list(reserved) + kept]
+        if min(near[:len(reserved)]) > margin and min(near[len(reserved):], default=1.0) > apart:
+            kept.append(c)
+    return np.array(kept)
+
+
+#: colours the setup-plan page gives other meanings: unreached stain, clean surface, table
+SETUP_RESERVED = (RED, GREY, WOOD)
+#: setup colours: 11 qualitative ones, none close to :data:`SETUP_RESERVED` nor to each other
+SETUP_PALETTE = _setup_palette(SETUP_RESERVED)
+
+
 def setup_colors(k: int) -> np.ndarray:
-    """(k, 3) RGB of setups 1..k (matplotlib's tab10, cycled)."""
-    cmap = matplotlib.colormaps["tab10"]
-    return np.array([cmap(i % 10)[:3] for i in range(k)])
+    """(k, 3) RGB of setups 1..k: :data:`SETUP_PALETTE`, cycled."""
+    return SETUP_PALETTE[np.arange(k) % len(SETUP_PALETTE)].reshape(-1, 3)
+
+
+#: the reach page's colour bar: the score's quantity and unit (I_m = w / w_max * J_l, a product of
+#: two ratios), then how to read it
+REACH_COLORBAR_TITLE = ("best score: maneuverability index I_m of a camera pose that sees the element "
+                        "(dimensionless; MAVAC eq. 4)")
+REACH_COLORBAR_GUIDE = "higher = better reach (farther from singularities and joint limits); grey = not reached and seen"
 
 
 def reach_study_html(study, path, robot=None, cmap: str = "viridis"):
@@ -212,9 +253,8 @@ def reach_study_html(study, path, robot=None, cmap: str = "viridis"):
             [((0.55, 0.55, 0.55), f"not reached and seen from any spot ({int((score <= 0).sum())} elements)")],
             title=(f"{study.machine_name}: reach study, {100 * study.reach_fraction:.0f} % of |S| reached and seen "
                    f"({study.visibility} visibility)"),
-            colorbar=(cmap, 0.0, round(top, 3), "best score = maneuverability I_m of the camera pose, if it sees "
-                                                "the element"),
-            notes=["robot: at the spot and configuration with the highest score",
+            colorbar=(cmap, 0.0, round(top, 3), REACH_COLORBAR_TITLE),
+            notes=[REACH_COLORBAR_GUIDE, "robot: at the spot and configuration with the highest score",
                    f"{len(cands)} candidate spots: hidden layer 'spots' in the controls"])
         return ms.save_html(vis, path, legend=legend)
 
