@@ -116,7 +116,7 @@ def main() -> None:
             for vis in VISIBILITY_METHODS:
                 out = tmp / f"{name}_{vis}.html"
                 s = _run(["inspect", str(path), "--units", units, "--visibility", vis, "--out", str(out), *fast])
-                plan = json.loads(out.with_name(f"{path.stem}_plan.json").read_text())
+                plan = json.loads(out.with_suffix(".json").read_text())
                 rows.append((name, f"inspect --visibility {vis}", s, plan["C"]))
                 print(f"{name:16s} {'inspect --visibility ' + vis:32s} {s:8.1f}  C = {plan['C']:.3f} "
                       f"({plan['visibility']}), {len(plan['spots'])} spots, {len(plan['poses'])} poses", flush=True)
@@ -129,14 +129,14 @@ def main() -> None:
             s = _run(["reach", str(path), "--units", units, "--out", str(out), *fast])
             import pandas as pd
 
-            df = pd.read_csv(out.with_name(f"{path.stem}_reach.csv"))
+            df = pd.read_csv(out.with_suffix(".csv"))
             print(f"{name:16s} {'reach':32s} {s:8.1f}  {100 * (df.score > 0).mean():.1f} % of S reached and seen "
                   f"(raycast)", flush=True)
         for name, stain in (("dome", ["--stain", "up:60"]), ("painted_box", ["--stain", "colors", "--subdivide"])):
             path, units, _ = meshes[name]
             out = tmp / f"{name}_setups.html"
             s = _run(["setups", str(path), "--units", units, *stain, "--out", str(out)])
-            plan = json.loads(out.with_name(f"{path.stem}_setups.json").read_text())
+            plan = json.loads(out.with_suffix(".json").read_text())
             print(f"{name:16s} {'setups ' + ' '.join(stain):32s} {s:8.1f}  {len(plan['setups'])} setups, "
                   f"T = {plan['cost_s']:.0f} s, {plan['status']}", flush=True)
         if args.screenshots is not None:
