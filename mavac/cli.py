@@ -163,15 +163,17 @@ def cmd_inspect(args) -> int:
     return 0
 
 
-def _unrepeated(make_plan):
-    """``make_plan()``, its warnings shown except those its summary lists (each said once)."""
+def _unrepeated(make, listed=lambda result: result.warnings):
+    """``make()``, its warnings shown once each, except those its summary lists
+    (``listed(result)``)."""
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        plan = make_plan()
-    for w in seen:
-        if str(w.message) not in plan.warnings:
+        result = make()
+    said = set(listed(result))
+    for w in {str(w.message): w for w in seen}.values():
+        if str(w.message) not in said:
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
-    return plan
+    return result
 
 
 def _print_frame(machine) -> None:
@@ -473,8 +475,9 @@ def cmd_scrub(args) -> int:
     with bar:
         part = _marked_part(args, bar, intensity)
         _next(bar, "planning and scrubbing")
-        run = _unrepeated_run(lambda: run_part(part, fast=args.fast, lissajous=lissajous, seed=args.seed, cell=cell,
-                                               snapshots=False))
+        run = _unrepeated(lambda: run_part(part, fast=args.fast, lissajous=lissajous, seed=args.seed, cell=cell,
+                                           snapshots=False),
+                          listed=lambda run: [w for plan in run.plans for w in plan.warnings])  # each round re-plans
         _next(bar, "writing")
         with atomic_paths(out, csv, html) as (tmp_out, tmp_csv, tmp_html):
             write_json(_scrub_doc(run, part), tmp_out)
@@ -498,19 +501,6 @@ def _scrub_doc(run, part) -> dict:
         setup["base_T_file"] = T_file.tolist()
     doc["frame"] += "; base_T_file: the mesh file's own frame (after --units and --up) in the same base frame"
     return doc
-
-
-def _unrepeated_run(make_run):
-    """``make_run()``, its warnings shown once each, except those its plans' summaries list
-    (each round re-plans)."""
-    with warnings.catch_warnings(record=True) as seen:
-        warnings.simplefilter("always")
-        run = make_run()
-    listed = {w for plan in run.plans for w in plan.warnings}
-    for message in dict.fromkeys(str(w.message) for w in seen):
-        if message not in listed:
-            print(f"mavac: warning: {message}", file=sys.stderr)
-    return run
 
 
 def _pass_table(run):
@@ -581,6 +571,14 @@ def _stain_options(p: argparse.ArgumentParser) -> None:
                    help="split stained triangles larger than the tool tip (1.5 cm^2) before planning")
 
 
+def _simulation_outputs(p: argparse.ArgumentParser, source: str, command: str, rows: str, page: str) -> None:
+    """``--out`` (the JSON result), ``--csv`` and ``--html`` of a simulating command (clean, scrub)."""
+    p.add_argument("--out", help=f"JSON result (default: <{source}>_{command}.json in $MAVAC_OUT or the current "
+                                 "directory)")
+    p.add_argument("--csv", help=f"CSV, {rows} (default: <{source}>_{command}.csv beside the JSON file)")
+    p.add_argument("--html", help=f"{page} (default: beside the JSON file)")
+
+
 def _scrub_parser(sub, fmt) -> None:
     """The ``scrub`` subcommand's parser (Kabir et al.'s two-arm cell in simulation)."""
     from .params import BimanualCellParams
@@ -607,10 +605,8 @@ def _scrub_parser(sub, fmt) -> None:
                    help="re-planning rounds for the stain the camera still sees after the plan (0-20)")
     p.add_argument("--fast", action="store_true",
                    help="one sampling level, the first setup only, no re-planning: a quick look")
-    p.add_argument("--out", help="JSON result (default: <part>_scrub.json in $MAVAC_OUT or the current directory)")
-    p.add_argument("--csv", help="CSV, one row per pass (default: <part>_scrub.csv beside the JSON file)")
-    p.add_argument("--html", help="meshcat replay: both arms, the part, its stain fading pass by pass (default: "
-                                  "beside the JSON file)")
+    _simulation_outputs(p, "part", "scrub", "one row per pass",
+                        "meshcat replay: both arms, the part, its stain fading pass by pass")
     _common(p, role="part")
     p.set_defaults(func=cmd_scrub)
 
@@ -635,10 +631,9 @@ def _clean_parser(sub, fmt) -> None:
     p.add_argument("--jobs", type=int, default=1, help="trials run at a time (-1: every core)")
     p.add_argument("--fast", action="store_true",
                    help="coarser inspection plan (as 'mavac inspect --fast'): seconds, fewer guards")
-    p.add_argument("--out", help="JSON result (default: <mesh>_clean.json in $MAVAC_OUT or the current directory)")
-    p.add_argument("--csv", help="CSV, one row per heap per trial (default: <mesh>_clean.csv beside the JSON file)")
-    p.add_argument("--html", help="meshcat replay of the first trial: the robot through its poses, heaps vanishing as "
-                                  "they are vacuumed, misses coloured by cause (default: beside the JSON file)")
+    _simulation_outputs(p, "mesh", "clean", "one row per heap per trial",
+                        "meshcat replay of the first trial: the robot through its poses, heaps vanishing as they "
+                        "are vacuumed, misses coloured by cause")
     _common(p, role="machine")
     p.set_defaults(func=cmd_clean)
 

@@ -22,7 +22,7 @@ def test_each_face_leaves_each_shell_at_the_end_of_the_pass_that_took_it_below_t
     assert got == {(0, 1, 30), (0, 1, 0), (1, 2, 20), (2, 1, 10)}
 
 
-def test_shells_lie_along_the_face_normals_one_step_per_level():
+def test_shells_lie_along_the_normals_one_step_per_level():
     mesh = _three_triangles()
     shells = stain_shells(mesh, np.array([1.0, 0.0, 0.0]), [], [])
     assert [frame for *_, frame in shells] == [0, 0, 0]  # no pass: nothing fades

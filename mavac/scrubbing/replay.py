@@ -2,7 +2,7 @@
 arms, the part, its tool paths and its stain, which fades as the passes remove it.
 
 The stain is drawn in :data:`STAIN_LEVELS` shells, one per thickness level, each a little
-further out along the face normals than the last (no z-fighting): a face shows the colour of
+further out along the vertex normals than the last (no z-fighting): a face shows the colour of
 the highest level its stain is still above. The stain only thins (a pass removes, nothing
 adds), so every face of a shell needs one moment, the end of the pass that took it below the
 level, at which it disappears; faces that disappear together are one node of the animation.
@@ -19,7 +19,7 @@ from .cell import cell_robots, flange_T_part
 #: Stain thickness levels (layers; 1 = a full stain) of the shells, with their colours: the page
 #: shows the stain above 2 %, a third and two thirds (ours: three shades read at a glance).
 STAIN_LEVELS = ((0.02, (0.80, 0.66, 0.45)), (1 / 3, (0.62, 0.42, 0.22)), (2 / 3, (0.42, 0.25, 0.10)))
-#: Offset of each shell along the face normals, metres per level (ours: above depth-buffer noise
+#: Offset of each shell along the vertex normals, metres per level (ours: above depth-buffer noise
 #: at the page's framing, below what the eye reads as a gap).
 SHELL_STEP = 4e-4
 #: The page opens on the part's positions plus this many bounding radii of the part around them
@@ -43,12 +43,18 @@ def _keys(run, max_keys: int):
     return keep, frames, ends
 
 
-def replay_tracks(run, cleaner, holder, cell: BimanualCellParams, *, max_keys: int = 400):
-    """Keyframes of the whole run: ``(times (k,) int frames at 30 fps, q_cleaner (k, 7),
-    q_holder (k, 7), world_T_part (k, 4, 4))``, at most ``max_keys`` evenly spaced samples."""
+#: most keyframes of a replay (ours: three.js interpolates between them; with two arms and a
+#: 20k-face part, 400 keys took a page past 5 MB, 200 keep it near 4 MB)
+MAX_KEYS = 200
+
+
+def replay_tracks(run, holder, cell: BimanualCellParams, *, max_keys: int = MAX_KEYS):
+    """Keyframes of the whole run, at most ``max_keys`` evenly spaced samples: ``(times (k,) int
+    frames at 30 fps, q_cleaner (k, 7), q_holder (k, 7), world_T_part (k, 4, 4), track_ends)``,
+    ``track_ends`` the frame at which each of ``run.execution.tracks`` ends."""
     import pinocchio as pin
 
-    keep, frames, _ = _keys(run, max_keys)
+    keep, frames, ends = _keys(run, max_keys)
     qc = np.concatenate([c for c, _, _ in run.execution.tracks])[keep]
     qh = np.concatenate([h for _, h, _ in run.execution.tracks])[keep]
     model, data = holder.model, holder.model.createData()
@@ -57,7 +63,7 @@ def replay_tracks(run, cleaner, holder, cell: BimanualCellParams, *, max_keys: i
     for q in qh:
         pin.framesForwardKinematics(model, data, q)
         parts.append(cell.world_T_holder @ data.oMf[fid].homogeneous @ flange_T_part(cell))
-    return frames, qc, qh, np.array(parts)
+    return frames, qc, qh, np.array(parts), ends
 
 
 def stain_shells(mesh: trimesh.Trimesh, initial, states, end_frames) -> list[tuple[int, trimesh.Trimesh, tuple, int]]:
@@ -93,9 +99,10 @@ def stain_shells(mesh: trimesh.Trimesh, initial, states, end_frames) -> list[tup
 
 
 def _shell(mesh: trimesh.Trimesh, faces, offset: float) -> trimesh.Trimesh:
-    """The faces as separate triangles, moved ``offset`` m along their normals."""
-    tri = mesh.triangles[faces] + offset * mesh.face_normals[faces][:, None, :]
-    return trimesh.Trimesh(tri.reshape(-1, 3), np.arange(3 * len(faces)).reshape(-1, 3), process=False)
+    """The faces, their shared vertices moved ``offset`` m along the vertex normals (one copy of
+    each vertex keeps the page small)."""
+    shell = mesh.submesh([faces], append=True)
+    return trimesh.Trimesh(shell.vertices + offset * shell.vertex_normals, shell.faces, process=False)
 
 
 def replay_html(run, path, *, cell: BimanualCellParams = BimanualCellParams(),
@@ -109,8 +116,7 @@ def replay_html(run, path, *, cell: BimanualCellParams = BimanualCellParams(),
     from ..viz.scenes import robot_tracks
 
     cleaner, holder = cell_robots(cell, toolpath)
-    frames, qc, qh, parts = replay_tracks(run, cleaner, holder, cell)
-    _, _, ends = _keys(run, 400)
+    frames, qc, qh, parts, ends = replay_tracks(run, holder, cell)
     states = run.execution.stain_states
     shells = stain_shells(run.state.mesh, run.state.initial, [s for _, s in states],
                           [ends[i - 1] for i, _ in states])

@@ -78,14 +78,15 @@ class PartRun:
 
     def setup_records(self) -> list[dict]:
         """One dict per executed setup: its pose, its passes' contact measures, stain removed."""
-        ex, total = self.execution, float(self.state.initial.sum())
+        ex = self.execution
+        # the stain after each pass, the initial one first: a setup's passes run from first_row
+        stain = [self.state.initial.sum()] + [t.sum() for _, t in ex.stain_states]
         ends = [s["first_row"] for s in ex.setups[1:]] + [len(ex.rows)]
-        after = [s["stain_before"] for s in ex.setups[1:]] + [self.state.thickness]
         return [dict(label=s["label"], base_T_part=s["world_T_part"], q_holder=s["q_holder"], patches=s["patches"],
                      passes=[{("pass" if k == "pass_" else k): v for k, v in row.items() if k != "setup"}
                              for row in ex.rows[s["first_row"]:end]],
-                     stain_removed=float((s["stain_before"].sum() - a.sum()) / total))
-                for s, end, a in zip(ex.setups, ends, after)]
+                     stain_removed=float((stain[s["first_row"]] - stain[end]) / stain[0]))
+                for s, end in zip(ex.setups, ends)]
 
     def to_dict(self) -> dict:
         """The run as JSON-ready data (NaN as None): status, operating parameters, setups, notes."""

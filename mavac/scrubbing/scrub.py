@@ -450,7 +450,7 @@ class Execution:
     setups : list of dict
         One per executed setup: ``label``, ``world_T_part`` (4, 4) as the part was met (world =
         the cleaning arm's base frame), ``q_holder`` (7,) rad, ``patches`` (int), ``first_row``
-        (its first entry in ``rows``), ``stain_before`` (F,) thickness when it began.
+        (its first entry in ``rows`` and in ``stain_states``: one each per pass).
     """
 
     rows: list = field(default_factory=list)
@@ -497,7 +497,7 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
     fix_part(cell)
     T = world_T_part(cell)
     out.setups.append(dict(label=label, world_T_part=T, q_holder=np.asarray(q_holder, float).copy(),
-                           patches=len(patches), first_row=len(out.rows), stain_before=state.thickness.copy()))
+                           patches=len(patches), first_row=len(out.rows)))
     tp = toolpath_for_setup(part, T, np.asarray(patches), toolpath, reachable=reachable_from_robot(cell.cleaner_model))
     if snapshot is not None:
         out.snapshots.append((f"{label} before cleaning", snapshot(cell, state)))
