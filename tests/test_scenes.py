@@ -185,7 +185,7 @@ def test_reach_page_colour_bar_names_the_quantity_its_unit_and_how_to_read_it(tm
 def test_plan_page_draws_a_bounded_number_of_camera_triads(plan, tmp_path, monkeypatch):
     cap = 5
     assert len(plan.world_T_camera) > cap  # the fixture plan has more poses than this cap
-    monkeypatch.setattr(scenes, "MAX_TRIADS", cap, raising=False)
+    monkeypatch.setattr(scenes, "MAX_TRIADS", cap)
     html = scenes.inspection_plan_html(plan, tmp_path / "capped.html").read_text()
     triads = {c["path"] for c in commands(html)
               if c["type"] == "set_object" and c["path"].startswith("/meshcat/cameras/")}
