@@ -14,6 +14,8 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import hashlib
+import json
 import os
 import re
 import signal
@@ -108,7 +110,7 @@ def _load(path, units, role, up):
         mesh = load_mesh(path, units=units, role=role)
     except ValueError as exc:  # name the flag, not the keyword argument
         raise ValueError(re.sub(r"units='(\w+)'", r"--units \1", str(exc))) from None
-    if up.lstrip("+") != "z":  # e.g. a y-up export (many COLLADA/OBJ files)
+    if (up or "z").lstrip("+") != "z":  # e.g. a y-up export (many COLLADA/OBJ files)
         turn = np.eye(4)
         turn[:3, :3] = UP_TURNS[up.lstrip("+")]
         mesh.apply_transform(turn)
@@ -154,13 +156,21 @@ def cmd_inspect(args) -> int:
         warn_low_coverage(ctx, plan)
         _next(bar, "writing")
         with atomic_paths(out, js) as (tmp_out, tmp_js):
-            plan.to_json(tmp_js)
+            write_json({**plan.to_dict(), "mesh": _mesh_doc(args)}, tmp_js)
             plan.to_html(tmp_out)
         _next(bar, "done")
     print(plan.summary())
     _print_frame(machine)
     print(f"wrote {out} and {js} in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def _mesh_doc(args) -> dict:
+    """How the mesh file was read: its name, content digest, unit and up axis (a plan file's
+    ``mesh`` entry, which ``clean --plan`` checks)."""
+    with open(args.mesh, "rb") as f:
+        digest = hashlib.file_digest(f, "sha256").hexdigest()
+    return {"file": Path(args.mesh).name, "sha256": digest, "units": args.units, "up": args.up or "z"}
 
 
 def _unrepeated(make, listed=lambda result: result.warnings):
@@ -324,8 +334,10 @@ def _clean_setup(args):
 
     if not 1 <= args.trials <= MAX_CLEAN_TRIALS:
         raise ValueError(f"--trials must be in [1, {MAX_CLEAN_TRIALS}], got {args.trials}")
-    if args.jobs == 0 or args.jobs < -1:
+    if args.jobs is not None and (args.jobs == 0 or args.jobs < -1):
         raise ValueError(f"--jobs must be a positive worker count or -1 (every core), got {args.jobs}")
+    if args.jobs is not None and args.scheduler is not None:
+        raise ValueError("--jobs with --scheduler: the dask cluster's workers run the trials; leave --jobs out")
     check_seed(args.seed)
     try:
         check_seed(args.seed + args.trials - 1)
@@ -337,15 +349,74 @@ def _clean_setup(args):
     return dataclasses.replace(offline, seed=args.seed), online, list(range(args.seed, args.seed + args.trials))
 
 
+def _plan_file(args) -> dict | None:
+    """``clean --plan``'s document, checked against the mesh file before any work: the plan
+    file says how the mesh was read (unit, up axis), so ``--units``, ``--up`` and ``--fast`` are
+    refused beside it."""
+    if args.plan is None:
+        return None
+    for flag, given in (("--fast", args.fast), ("--units", args.units is not None), ("--up", args.up is not None)):
+        if given:
+            raise ValueError(f"{flag} with --plan: the plan file sets the plan and how its mesh was read; "
+                             f"leave {flag} out")
+    path = Path(args.plan).expanduser()
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ValueError(f"--plan {path}: cannot read a JSON plan ({type(exc).__name__}: {exc})") from None
+    mesh = doc.get("mesh") if isinstance(doc, dict) else None
+    if not isinstance(mesh, dict) or not {"sha256", "units", "up"} <= set(mesh):
+        raise ValueError(f"--plan {path}: not a plan file written by 'mavac inspect' (it has no 'mesh' entry)")
+    if mesh["sha256"] != _mesh_doc(args)["sha256"]:
+        raise ValueError(f"--plan {path} was made from {mesh.get('file')!r}, whose content differs from {args.mesh}")
+    return doc
+
+
+def _clean_plan(machine, plan_doc, offline):
+    """The inspection plan of ``clean``: read back from ``--plan``, else computed."""
+    from .inspection.inspection_plan import InspectionPlan, plan_inspection
+
+    if plan_doc is None:
+        return _unrepeated(lambda: plan_inspection(machine, params=offline))
+    try:
+        return InspectionPlan.from_dict(plan_doc, machine)
+    except ValueError as exc:
+        raise ValueError(f"--plan: {exc}") from None
+
+
+#: seconds ``--scheduler`` waits for a dask scheduler to answer
+SCHEDULER_TIMEOUT_S = 10
+
+
+@contextlib.contextmanager
+def _trial_backend(address: str | None):
+    """Where ``clean``'s trials run: in this process or its workers (None), or on the dask
+    scheduler at ``address``, through joblib's dask backend (yields the worker count to ask for)."""
+    if address is None:
+        yield None
+        return
+    try:
+        import distributed
+        import joblib
+    except ImportError:
+        raise ValueError("--scheduler needs dask's distributed package: pip install 'mavac[dask]'") from None
+    try:
+        client = distributed.Client(address, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False)
+    except (OSError, ValueError, TypeError) as exc:
+        raise ValueError(f"--scheduler {address}: no dask scheduler answered ({type(exc).__name__}: {exc})") from None
+    with client, joblib.parallel_backend("dask", client=client):
+        yield -1
+
+
 def _clean_trial(item):
     """One trial of ``mavac clean`` (module level, so that worker processes can run it)."""
     from .cleaning.trial import run_trial
 
-    machine, plan, params, seed = item
-    return run_trial(machine, plan, params=params, seed=seed)
+    machine, plan, params, seed, progress = item
+    return run_trial(machine, plan, params=params, seed=seed, progress=progress)
 
 
-def _clean_report(args, results, plan, offline, online) -> tuple[dict, object]:
+def _clean_report(args, results, plan, online) -> tuple[dict, object]:
     """The JSON document and the per-heap table (one row per heap per trial) of a clean run."""
     import pandas as pd
 
@@ -360,9 +431,9 @@ def _clean_report(args, results, plan, offline, online) -> tuple[dict, object]:
     doc = {
         "mesh": str(Path(args.mesh).resolve()), "machine": results[0].machine,
         "status": "; ".join(reasons) if reasons else "ok",
-        "parameters": {"units": args.units, "up": args.up, "spacing": online.dust.spacing, "seed": args.seed,
-                       "trials": args.trials, "fast": args.fast, "inspection": dataclasses.asdict(offline),
-                       "online": dataclasses.asdict(online)},
+        "parameters": {"units": args.units, "up": args.up or "z", "spacing": online.dust.spacing,
+                       "seed": args.seed, "trials": args.trials, "fast": args.fast, "plan_file": args.plan,
+                       "inspection": dataclasses.asdict(plan.params), "online": dataclasses.asdict(online)},
         "plan": {"C": plan.C, "O": plan.O, "visibility": plan.visibility, "spots": plan.n_spots,
                  "guards": plan.n_guards, "nos_guards": plan.n_nos_guards, "poses": int(len(plan.poses)),
                  "warnings": list(plan.warnings)},
@@ -378,38 +449,46 @@ def _clean_report(args, results, plan, offline, online) -> tuple[dict, object]:
 
 
 def cmd_clean(args) -> int:
-    """MAVAC online cleaning of a machine in simulation: plan, then trials of Algorithm 1."""
-    import json
-
+    """MAVAC online cleaning of a machine in simulation: plan (or ``--plan``), then trials of Algorithm 1."""
     from .cleaning.heaps import heaps_for_trial
     from .geometry.machines import machine_from_mesh
-    from .inspection.inspection_plan import plan_inspection
     from .parallel import map_trials
 
     stem = Path(args.mesh).stem
     out, csv = _outputs(args, args.mesh, f"{stem}_clean", "csv", suffix="json")
     html = _replay_output(args, args.mesh, out, csv)
     offline, online, seeds = _clean_setup(args)
+    plan_doc = _plan_file(args)
+    units, up = (args.units, args.up) if plan_doc is None else (plan_doc["mesh"]["units"], plan_doc["mesh"]["up"])
     t0 = time.perf_counter()
     bar = _stage_bar(["loading mesh", "inspection plan", "cleaning trials", "writing"], args.quiet)
-    with bar:
-        machine = machine_from_mesh(_load(args.mesh, args.units, "machine", args.up), name=stem)
+    with _trial_backend(args.scheduler) as remote_jobs, bar:
+        machine = machine_from_mesh(_load(args.mesh, units, "machine", up), name=stem)
         try:  # a heap spacing the machine cannot take is refused before the plan
             heaps_for_trial(machine, online.dust, seeds[0])
         except ValueError as exc:
             raise ValueError(f"--spacing: {exc}") from None
-        _next(bar, "inspection plan")
-        plan = _unrepeated(lambda: plan_inspection(machine, params=offline))
+        _next(bar, "inspection plan" if plan_doc is None else "reading the plan")
+        plan = _clean_plan(machine, plan_doc, offline)
         _next(bar, "cleaning trials")
-        results = map_trials(_clean_trial, [(machine, plan, online, s) for s in seeds], n_jobs=args.jobs,
+        jobs = remote_jobs or args.jobs or 1
+        each = _bars(args) and jobs == 1  # a bar over the guard poses of each trial, run here
+        results = map_trials(_clean_trial, [(machine, plan, online, s, each) for s in seeds], n_jobs=jobs,
                              desc="cleaning trials", progress=_bars(args))
         _next(bar, "writing")
-        doc, table = _clean_report(args, results, plan, offline, online)
+        doc, table = _clean_report(args, results, plan, online)
         with atomic_paths(out, csv, html) as (tmp_out, tmp_csv, tmp_html):
             tmp_out.write_text(json.dumps(doc, indent=2, sort_keys=True, allow_nan=False))
             table.to_csv(tmp_csv, index=False, float_format="%.6g")
             _replay_page(results[0], machine, tmp_html)
         _next(bar, "done")
+    _print_clean(stem, plan, results, doc)
+    _print_frame(machine)
+    print(f"wrote {out}, {csv} and {html} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _print_clean(stem: str, plan, results, doc) -> None:
     print(plan.summary())
     for r in results:
         print(r.summary())
@@ -417,9 +496,6 @@ def cmd_clean(args) -> int:
         s = doc["summary"]
         print(f"{stem}: {s['cleaned']} of {s['heaps']} heaps cleaned over {s['trials']} trials "
               f"({s['cleaning_pct']:.1f} %; mean of the trials {s['cleaning_pct_mean_of_trials']:.1f} %)")
-    _print_frame(machine)
-    print(f"wrote {out}, {csv} and {html} in {time.perf_counter() - t0:.1f} s")
-    return 0
 
 
 def _replay_output(args, source: str, out: Path, csv: Path) -> Path:
@@ -517,8 +593,9 @@ def _pass_table(run):
 
 def _common(p: argparse.ArgumentParser, *, role: str) -> None:
     p.add_argument("--units", choices=("m", "cm", "mm", "in"), default=None, help=UNITS_HELP)
-    p.add_argument("--up", choices=UP_CHOICES, default="z", metavar="{+x,-x,+y,-y,+z,-z}",
-                   help="which axis of the file points up (x = +x; the mesh is turned so that it becomes +z)")
+    p.add_argument("--up", choices=UP_CHOICES, default=None, metavar="{+x,-x,+y,-y,+z,-z}",
+                   help="which axis of the file points up (x = +x; the mesh is turned so that it becomes +z) "
+                        "(default: z)")
     p.add_argument("--seed", type=int, default=0, help="seed of every random choice (same seed, same result)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(role=role)
@@ -617,8 +694,8 @@ def _clean_parser(sub, fmt) -> None:
                        description="MAVAC's online loop on your machine, simulated in pybullet: green dust heaps "
                                    "on every upward-facing surface, then, for each pose of the inspection plan, "
                                    "look, detect the dust, plan an approach and vacuum it (Algorithm 1). The "
-                                   "inspection plan is computed first, as 'mavac inspect' does (its JSON file "
-                                   "keeps no surface elements, so it cannot be read back). Writes a JSON file "
+                                   "inspection plan is computed first, as 'mavac inspect' does, or read from "
+                                   "the JSON file 'mavac inspect' wrote (--plan). Writes a JSON file "
                                    "(summary, one entry per trial, parameters), a CSV with one row per heap "
                                    "per trial (position, cleaned, cause of the miss) and an HTML replay of the "
                                    "first trial. The machine should be "
@@ -628,7 +705,14 @@ def _clean_parser(sub, fmt) -> None:
                    help="distance between dust heaps, metres (default 0.10, the paper's)")
     p.add_argument("--trials", type=int, default=1,
                    help="trials, each with its own heap layout: seeds --seed .. --seed + trials - 1")
-    p.add_argument("--jobs", type=int, default=1, help="trials run at a time (-1: every core)")
+    p.add_argument("--jobs", type=int, default=None, help="trials run at a time (-1: every core) (default: 1)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the trials on the dask cluster whose scheduler is at ADDRESS (e.g. "
+                        "tcp://10.0.0.5:8786; needs pip install 'mavac[dask]'; joblib runs them here when the "
+                        "cluster has a single core)")
+    p.add_argument("--plan", default=None, metavar="PLAN.json",
+                   help="the inspection plan 'mavac inspect' wrote for this mesh file (its JSON file), instead "
+                        "of planning again; it sets the unit and up axis")
     p.add_argument("--fast", action="store_true",
                    help="coarser inspection plan (as 'mavac inspect --fast'): seconds, fewer guards")
     _simulation_outputs(p, "mesh", "clean", "one row per heap per trial",

@@ -368,3 +368,19 @@ class CheckedFields:
 
     def __post_init__(self):
         check_fields(self)
+
+    @classmethod
+    def from_dict(cls, values: dict):
+        """The parameters ``dataclasses.asdict`` gave, e.g. read back from a JSON file: nested
+        parameter dataclasses are rebuilt from their dicts and every field is checked as usual;
+        a key that is not a field is a ``ValueError`` naming it, a missing one takes its default."""
+        if not isinstance(values, dict):
+            raise ParameterTypeError(f"{cls.__name__} values must be a dict, got {_type_name(values)}")
+        kinds = {name: kind for name, kind, _ in _field_types(cls)}
+        unknown = sorted(set(values) - set(kinds))
+        if unknown:
+            raise ValueError(f"{cls.__name__} has no parameter {', '.join(map(repr, unknown))}; "
+                             f"its parameters are {', '.join(kinds)}")
+        return cls(**{name: (kinds[name].from_dict(value) if isinstance(value, dict)
+                             and isinstance(kinds[name], type) and issubclass(kinds[name], CheckedFields)
+                             else value) for name, value in values.items()})

@@ -2,6 +2,7 @@
 connected, and hard scenes give a result with a reason instead of an exception."""
 
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -311,3 +312,16 @@ def test_replay_is_refused_without_a_trial_or_for_another_machine(small, tmp_pat
     with pytest.raises(TypeError, match="machine"):
         r.to_html(tmp_path / "x.html", "box")
     assert not list(tmp_path.iterdir())
+
+
+def test_progress_shows_the_poses_visited_and_the_heaps_cleaned_and_changes_nothing(small, capsys):
+    machine, plan = small
+    quiet = T.run_trial(machine, plan, params=PARAMS, seed=3)
+    assert "guard poses" not in capsys.readouterr().err
+    shown = T.run_trial(machine, plan, params=PARAMS, seed=3, progress=True)
+    err = capsys.readouterr().err
+    assert f"/{len(plan.poses)} " in err and "guard poses" in err
+    assert re.search(rf"\d+ of {shown.n_heaps} heaps cleaned", err), err
+    assert _table_row(shown) == _table_row(quiet)
+    with pytest.raises(TypeError, match="progress must be True or False"):
+        T.run_trial(machine, plan, params=PARAMS, progress="yes")

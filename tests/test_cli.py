@@ -465,6 +465,80 @@ def test_clean_interrupted_exits_130_and_leaves_no_file(cleaned, tmp_path, capsy
     assert not list(tmp_path.iterdir())
 
 
+def test_clean_reads_the_plan_inspect_wrote_and_cleans_as_if_it_had_planned(cleaned, tmp_path, capsys):
+    d, _ = cleaned
+    code, _, err = run(["inspect", str(d / "box.stl"), "--fast", "--quiet", "--out", str(tmp_path / "p.html")], capsys)
+    assert code == 0, err
+    mesh = json.loads((tmp_path / "p.json").read_text())["mesh"]
+    assert mesh["file"] == "box.stl" and mesh["up"] == "z" and mesh["units"] is None and len(mesh["sha256"]) == 64
+    code, _, err = run(["clean", str(d / "box.stl"), "--plan", str(tmp_path / "p.json"), "--spacing", "0.2",
+                        "--quiet", "--trials", "2", "--out", str(tmp_path / "c.json")], capsys)
+    assert code == 0, err
+    assert (tmp_path / "c.csv").read_bytes() == (d / "out" / "run.csv").read_bytes()
+    doc, ref = _strict_json(tmp_path / "c.json"), _strict_json(d / "out" / "run.json")
+    assert doc["plan"] == ref["plan"] and doc["parameters"]["inspection"] == ref["parameters"]["inspection"]
+    assert doc["parameters"]["plan_file"] == str(tmp_path / "p.json") and ref["parameters"]["plan_file"] is None
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--plan", "{plan}", "--fast"], "--fast with --plan: the plan file sets the plan"),
+    (["--plan", "{plan}", "--up", "y"], "--up with --plan"),
+    (["--plan", "{plan}", "--units", "mm"], "--units with --plan"),
+    (["--plan", "{other}"], "--plan {other} was made from 'cabinet.stl', whose content differs from {mesh}"),
+    (["--plan", "{mesh}"], "--plan {mesh}: cannot read a JSON plan (UnicodeDecodeError"),
+    (["--plan", "{tmp}/none.json"], "--plan {tmp}/none.json: cannot read a JSON plan (FileNotFoundError"),
+    (["--plan", "{bare}"], "--plan {bare}: not a plan file written by 'mavac inspect' (it has no 'mesh' entry)"),
+    (["--scheduler", "tcp://127.0.0.1:1", "--jobs", "2"], "--jobs with --scheduler"),
+])
+def test_clean_refuses_a_plan_file_or_scheduler_it_cannot_use_before_any_work(cleaned, tmp_path, capsys,
+                                                                              no_compute, argv, message):
+    files = {"mesh": str(cleaned[0] / "box.stl"), "tmp": str(tmp_path), "plan": str(tmp_path / "p.json"),
+             "other": str(tmp_path / "other.json"), "bare": str(tmp_path / "bare.json")}
+    mesh_doc = {"file": "cabinet.stl", "sha256": "0" * 64, "units": None, "up": "z"}
+    (tmp_path / "other.json").write_text(json.dumps({"mesh": mesh_doc}))
+    (tmp_path / "p.json").write_text(json.dumps({"mesh": mesh_doc}))
+    (tmp_path / "bare.json").write_text(json.dumps({"poses": []}))
+    made = set(tmp_path.iterdir())
+    code, _, err = run(["clean", files["mesh"], "--quiet", "--out", str(tmp_path / "x.json"),
+                        *[a.format(**files) for a in argv]], capsys)
+    assert code == 1 and err.startswith(f"mavac clean: error: {message.format(**files)}"), err
+    assert "Traceback" not in err and set(tmp_path.iterdir()) == made
+
+
+def test_clean_runs_its_trials_on_a_dask_cluster_and_cleans_the_same(cleaned, tmp_path, capsys):
+    import distributed  # the dask extra, installed by make
+
+    class Finished(distributed.diagnostics.plugin.SchedulerPlugin):
+        keys: list = []
+
+        def transition(self, key, start, finish, *args, **kwargs):
+            if finish == "memory":
+                self.keys.append(str(key))
+
+    d, _ = cleaned
+    # two workers: joblib runs the trials here when the cluster has a single core
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        cluster.scheduler.add_plugin(Finished())
+        code, _, err = run(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "0", "--trials", "2",
+                            "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "dask.json")], capsys)
+    ran = [key for key in Finished.keys if "clean_trial" in key]
+    assert code == 0, err
+    assert ran, "the trials did not run on the cluster's workers"
+    assert (tmp_path / "dask.csv").read_bytes() == (d / "out" / "run.csv").read_bytes()
+
+
+def test_clean_names_a_scheduler_that_does_not_answer(cleaned, tmp_path, capsys, monkeypatch):
+    import mavac.cli as cli_module
+
+    monkeypatch.setattr(cli_module, "SCHEDULER_TIMEOUT_S", 0.5)
+    code, _, err = run(["clean", str(cleaned[0] / "box.stl"), "--quiet", "--out", str(tmp_path / "x.json"),
+                        "--scheduler", "tcp://127.0.0.1:1"], capsys)
+    assert code == 1 and err.startswith("mavac clean: error: --scheduler tcp://127.0.0.1:1: no dask scheduler "
+                                        "answered"), err
+    assert not list(tmp_path.iterdir())
+
+
 def test_setups_refuses_patches_only_a_colliding_arm_reaches_and_says_how_many(tmp_path, capsys):
     # a bottle with a 4.4 cm neck, 36 cm tall, stained on its inside floor (1 cm up)
     profile = np.array([(0, 0), (0.08, 0), (0.08, 0.30), (0.03, 0.33), (0.03, 0.36), (0.022, 0.36),

@@ -268,3 +268,40 @@ def test_moving_the_machine_far_from_the_origin_changes_no_result(plan, robot, s
     moved = plan_inspection(machine, robot=robot, params=FAST)
     assert moved.C == pytest.approx(plan.C, abs=1e-9) and moved.O == pytest.approx(plan.O, abs=1e-9)
     np.testing.assert_allclose(moved.poses, plan.poses, atol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["raycast", "hpr"])
+def test_a_plan_read_back_from_its_json_is_the_plan(plan, ctx, method):
+    from mavac.inspection.inspection_plan import InspectionPlan
+
+    if method == "hpr":  # HPR's cover sets come from the same poses on another visibility
+        plan = plan_from_context(prepare_offline(ctx.machine, robot=ctx.robot, params=FAST.with_visibility("hpr")))
+    back = InspectionPlan.from_dict(json.loads(json.dumps(plan.to_dict())), ctx.machine)
+    np.testing.assert_array_equal(back.visible, plan.visible)
+    np.testing.assert_array_equal(back.poses, plan.poses)
+    np.testing.assert_array_equal(back.points, plan.points)
+    assert (back.C, back.O, back.C_guards, back.O_guards) == (plan.C, plan.O, plan.C_guards, plan.O_guards)
+    assert back.params == plan.params and back.visibility == method
+    assert back.pose_kind.tolist() == plan.pose_kind.tolist() and back.pose_spot.tolist() == plan.pose_spot.tolist()
+    assert back.to_dict() == plan.to_dict()
+
+
+def test_a_plan_file_on_another_machine_or_tampered_is_refused(plan, ctx):
+    from mavac.geometry.machines import machine_from_mesh
+    from mavac.inspection.inspection_plan import InspectionPlan
+
+    doc = json.loads(json.dumps(plan.to_dict()))
+    bigger = machine_from_mesh(ctx.machine.mesh.copy().apply_scale(1.3), name="pocket_box")
+    with pytest.raises(ValueError, match="another mesh, unit or up axis"):
+        InspectionPlan.from_dict(doc, bigger)
+    moved = json.loads(json.dumps(doc))
+    moved["poses"][0]["q"][0] += 0.5
+    with pytest.raises(ValueError, match="joints do not give its camera poses"):
+        InspectionPlan.from_dict(moved, ctx.machine)
+    for broken in ({k: v for k, v in doc.items() if k != "poses"}, {**doc, "spots": "none"}, []):
+        with pytest.raises(ValueError, match="not an inspection plan"):
+            InspectionPlan.from_dict(broken, ctx.machine)
+    with pytest.raises(ValueError, match="made for robot 'puma'"):
+        InspectionPlan.from_dict({**doc, "robot": "puma"}, ctx.machine)
+    with pytest.raises(ValueError, match="has no parameter 'P_x'"):
+        InspectionPlan.from_dict({**doc, "params": {**doc["params"], "P_x": 1}}, ctx.machine)

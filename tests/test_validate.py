@@ -102,3 +102,24 @@ def test_ranged_refuses_contradictory_declarations():
 
 def test_ranged_default_stays_the_class_attribute():
     assert _Declared.closed == 0.5 and _Declared.mode == "a"
+
+
+def test_every_parameter_dataclass_reads_back_from_its_json():
+    import json
+
+    import mavac.params as P
+
+    classes = [c for c in vars(P).values() if isinstance(c, type) and issubclass(c, CheckedFields)
+               and dataclasses.is_dataclass(c) and c.__module__ == P.__name__]
+    assert len(classes) > 10
+    for cls in classes:
+        default = cls()
+        assert cls.from_dict(json.loads(json.dumps(dataclasses.asdict(default)))) == default, cls.__name__
+    changed = P.InspectionParams().with_visibility("hpr")
+    assert P.InspectionParams.from_dict(json.loads(json.dumps(dataclasses.asdict(changed)))) == changed
+    with pytest.raises(ValueError, match=r"SpotParams has no parameter 'P_x'; its parameters are P_s, "):
+        P.InspectionParams.from_dict({"spot": {"P_x": 1.0}})
+    with pytest.raises(ValueError, match=r"P_s must be in \[0.0, 1.0\], got 2"):
+        P.InspectionParams.from_dict({"spot": {"P_s": 2}})
+    with pytest.raises(TypeError, match="InspectionParams values must be a dict, got list"):
+        P.InspectionParams.from_dict([])

@@ -30,6 +30,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from ..geometry.machines import Machine
 from ..geometry.transforms import matrix_to_se2, se2_to_matrix
@@ -39,7 +40,7 @@ from ..robots.models import RobotModel, ur10_mobile
 from ..seeding import check_seed, int_seed, rng_for
 from ..sim.render import intrinsics_from_fov, mavac_T_opencv, render_rgbd
 from ..sim.world import SimWorld
-from ..validate import check_instance
+from ..validate import check_bool, check_instance
 from .approach import find_approach
 from .clustering import areas_from_nodes
 from .detection import detect_dust, match_nodes
@@ -251,16 +252,22 @@ class _Run:
         self.K = intrinsics_from_fov(d.width, d.height, self.fov_y)
         self.recorder = ReplayRecorder(matrix_to_se2(cell.world_T_base), cell.q_cmd, result.n_heaps)
 
-    def execute(self, plan) -> None:
+    def execute(self, plan, progress: bool = False) -> None:
         """Algorithm 1, line 1-3 and the loop: every pose of T in order, folding and driving
-        between spots; stops (counting the skipped poses) only when the arm cannot fold."""
-        for i, pose in enumerate(plan.poses):
-            if i == 0 or plan.pose_spot[i] != plan.pose_spot[i - 1]:
-                if i > 0 and not self.fold_home(i):
-                    self.skip(plan.poses[i:], f"arm could not fold home before pose {i}")
-                    return
-                self.drive_to(pose[:3])
-            self.inspect_and_clean(i, pose)
+        between spots; stops (counting the skipped poses) only when the arm cannot fold.
+        ``progress``: a tqdm bar over the poses, with the heaps cleaned so far."""
+        n = self.result.n_heaps
+        with tqdm(total=len(plan.poses), desc="guard poses", unit="pose", disable=not progress, leave=False) as bar:
+            for i, pose in enumerate(plan.poses):
+                if i == 0 or plan.pose_spot[i] != plan.pose_spot[i - 1]:
+                    if i > 0 and not self.fold_home(i):
+                        self.skip(plan.poses[i:], f"arm could not fold home before pose {i}")
+                        return
+                    self.drive_to(pose[:3])
+                self.inspect_and_clean(i, pose)
+                bar.set_postfix_str(f"{int(np.count_nonzero(self.cell.dust.cleaned))} of {n} heaps cleaned",
+                                    refresh=False)
+                bar.update()
 
     def plan(self, q_goal, stage: str, index: int) -> Motion:
         """RRT-Connect from the commanded configuration to ``q_goal``; if it fails, once more
@@ -418,7 +425,8 @@ def _empty_result(name: str, seed: int, heaps, reason: str) -> TrialResult:
     return TrialResult(name, seed, np.asarray(heaps).reshape(-1, 3), np.zeros(n, dtype=bool), causes, reason=reason)
 
 
-def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None = None, seed: int = 0) -> TrialResult:
+def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None = None, seed: int = 0,
+              progress: bool = False) -> TrialResult:
     """One online cleaning trial (Algorithm 1) in pybullet.
 
     Parameters
@@ -432,6 +440,8 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     seed : int, in [0, 2**31 - 1]
         Heap layout, orientation samples, IK restarts and RRT-Connect seeds (checked once here;
         every stream is spawned from it by :mod:`mavac.seeding`).
+    progress : bool
+        A tqdm bar over the plan's poses (guards and NoS guards visited, heaps cleaned so far).
 
     Returns
     -------
@@ -450,6 +460,7 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     robot = ur10_mobile() if robot is None else check_instance("robot", robot, RobotModel)
     params = OnlineParams() if params is None else check_instance("params", params, OnlineParams)
     seed = check_seed(seed)
+    progress = check_bool("progress", progress)
     check_instance("plan", plan, InspectionPlan)
     heaps = heaps_for_trial(machine, params.dust, seed)
     if not len(heaps):
@@ -460,7 +471,7 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     with SimWorld(time_step=params.time_step, seed=seed) as world:
         cell = build_cell(world, machine, robot, heaps, params, se2_to_matrix(*plan.poses[0, :3]))
         run = _Run(cell, machine, params, seed, result, plan.params.camera)
-        run.execute(plan)
+        run.execute(plan, progress)
         result.cleaned = cell.dust.cleaned.copy()
         result.replay = run.recorder.replay()
     _score(result, run)

@@ -33,12 +33,12 @@ from tqdm.auto import tqdm
 
 from ..geometry.machines import Machine, machine_from_mesh, on_floor
 from ..geometry.surface import sample_surface
-from ..geometry.transforms import se2_matrices
+from ..geometry.transforms import compose, se2_matrices
 from ..io import write_json
 from ..params import InspectionParams
 from ..planning.tour import short_open_path
 from ..robots.collision import CollisionChecker
-from ..robots.kinematics import maneuverability
+from ..robots.kinematics import fk, maneuverability
 from ..robots.models import ur10_mobile
 from ..seeding import rng_for
 from ..validate import check_positive, check_size
@@ -258,6 +258,11 @@ class InspectionPlan:
         """Write :meth:`to_dict` atomically as JSON."""
         return write_json(self.to_dict(timings=timings), path)
 
+    @classmethod
+    def from_dict(cls, doc: dict, machine: Machine, *, robot=None) -> InspectionPlan:
+        """The plan :meth:`to_dict` wrote, rebuilt on its machine (:func:`plan_from_dict`)."""
+        return plan_from_dict(doc, machine, robot=robot)
+
     def to_html(self, path, robot=None):
         """Static meshcat HTML that frames the machine: observed (green) / unobserved (red)
         elements, spots, camera poses, the robot animated through T, a colour legend; the
@@ -272,6 +277,85 @@ def _timed(timings: dict, stage: str):
     t0 = time.perf_counter()
     yield
     timings[stage] = time.perf_counter() - t0
+
+
+#: How far a camera pose recomputed from a plan file's joints may lie from the file's, m (the
+#: file rounds it to 1e-9; a different robot or frame is off by centimetres)
+PLAN_FILE_ATOL = 1e-6
+
+
+def _plan_rows(doc: dict, nq: int) -> dict:
+    """The arrays of a plan file's document; ValueError when it is not one :meth:`InspectionPlan.to_dict` wrote."""
+    try:
+        rows = doc["poses"]
+        out = dict(base=np.array([r["base"] for r in rows], dtype=float).reshape(-1, 3),
+                   q=np.array([r["q"] for r in rows], dtype=float).reshape(-1, nq),
+                   spot=np.array([r["spot"] for r in rows], dtype=np.int64),
+                   kind=np.array([r["kind"] for r in rows], dtype="<U5"),
+                   target=np.array([r["target"] for r in rows], dtype=np.int64),
+                   world_T_camera=np.array([r["world_T_camera"] for r in rows], dtype=float).reshape(-1, 4, 4),
+                   maneuverability=np.array([r["maneuverability"] for r in rows], dtype=float),
+                   spots=np.array([[s["x"], s["y"], s["theta"]] for s in doc["spots"]], dtype=float).reshape(-1, 3))
+        out.update({k: doc[k] for k in ("machine", "robot", "params", "n_elements", "C", "nos_attempts", "warnings")})
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"plan: not an inspection plan written by InspectionPlan.to_dict or 'mavac inspect' "
+                         f"({type(exc).__name__}: {exc})") from None
+    if not set(out["kind"]) <= set(POSE_KINDS) or not np.isin(out["spot"], np.arange(len(out["spots"]))).all():
+        raise ValueError("plan: its poses name a kind other than guard/nos or a spot it does not list")
+    return out
+
+
+def plan_from_dict(doc: dict, machine: Machine, *, robot=None) -> InspectionPlan:
+    """Rebuild a plan from :meth:`InspectionPlan.to_dict` on the machine it was made for.
+
+    S is sampled again from the plan's parameters, each pose's camera comes from forward
+    kinematics of its base pose and joints, and what it sees from ``params.visibility``: the
+    file keeps neither S nor the cover sets. The rebuilt plan must reproduce the file.
+
+    Parameters
+    ----------
+    doc : dict
+        The plan's document (e.g. ``json.load`` of the file ``mavac inspect`` wrote).
+    machine : Machine
+        The machine, loaded and placed as when the plan was made (same unit and up axis).
+    robot : RobotModel, optional
+        The plan's robot; default :func:`mavac.robots.models.ur10_mobile`.
+
+    Returns
+    -------
+    InspectionPlan
+        Without the spot selection, NoS clusters and timings (not in the file).
+
+    Raises
+    ------
+    ValueError
+        When the document is not a plan, names another robot, or does not reproduce its element
+        count, camera poses or coverage C on ``machine`` (another mesh, unit or up axis).
+    """
+    if not isinstance(machine, Machine):
+        raise ValueError(f"machine must be a mavac Machine, got {type(machine).__name__}")
+    robot = ur10_mobile() if robot is None else robot
+    f = _plan_rows(doc, robot.nq)
+    if f["robot"] != robot.name:
+        raise ValueError(f"plan: made for robot {f['robot']!r}, not {robot.name!r}")
+    params = InspectionParams.from_dict(f["params"])
+    surf = surface_elements(machine.mesh, params.surface_spacing, params.seed)
+    P, N = surf.points, surf.normals
+    if len(P) != f["n_elements"]:
+        raise ValueError(f"plan: {f['n_elements']} surface elements in the file, {len(P)} on machine "
+                         f"{machine.name!r}: the plan was made for another mesh, unit or up axis")
+    T = compose(se2_matrices(f["base"]), fk(robot, f["q"], robot.camera_frame)) if len(f["q"]) else f["world_T_camera"]
+    if not np.allclose(T, f["world_T_camera"], rtol=0.0, atol=PLAN_FILE_ATOL):
+        raise ValueError(f"plan: its joints do not give its camera poses on robot {robot.name!r}")
+    vis = G.guard_visibility(T, P, N, params.camera, params.visibility, VisibilityScene(machine.mesh))
+    poses = PoseSet(np.hstack([f["base"], f["q"]]), f["spot"], f["kind"], f["target"], T, f["maneuverability"], vis)
+    C, O = coverage_overlap(vis, len(P))
+    Cg, Og = coverage_overlap(vis[poses.kind == "guard"], len(P))
+    if not np.isclose(C, f["C"], rtol=0.0, atol=1e-9):
+        raise ValueError(f"plan: coverage C = {f['C']:.4f} in the file, {C:.4f} on machine {machine.name!r}: "
+                         "the plan was made for another mesh, unit or up axis")
+    return InspectionPlan(f["machine"], robot.name, params, P, N, f["spots"], poses, None, [], list(f["nos_attempts"]),
+                          C, O, Cg, Og, {}, list(f["warnings"]), machine.mesh)
 
 
 #: Most surface elements an inspection plan takes: 40 times the test bench's 2,310 at 5 cm; every
