@@ -697,7 +697,7 @@ def _clean_parser(sub, fmt) -> None:
                                    "inspection plan is computed first, as 'mavac inspect' does, or read from "
                                    "the JSON file 'mavac inspect' wrote (--plan). Writes a JSON file "
                                    "(summary, one entry per trial, parameters), a CSV with one row per heap "
-                                   "per trial (position, cleaned, cause of the miss) and an HTML replay of the "
+                                   "per trial (position, cleaned, cause of the miss, the pose that saw it) and an HTML replay of the "
                                    "first trial. The machine should be "
                                    "0.3-5 m across.")
     p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")

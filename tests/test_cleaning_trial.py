@@ -251,7 +251,13 @@ def test_summary_and_heap_table_say_what_the_trial_stored(small):
     machine, plan = small
     r = T.run_trial(machine, plan, params=PARAMS, seed=3)
     table = r.heap_table()
-    assert list(table.columns) == ["heap", "x", "y", "z", "cleaned", "cause"]
+    assert list(table.columns) == ["heap", "x", "y", "z", "cleaned", "cause", "seen_by_pose"]
+    # the pose that first found a heap: one of the plan's, a heap it found counts as recalled
+    seen = table["seen_by_pose"].to_numpy()
+    assert ((seen >= -1) & (seen < len(plan.poses))).all() and np.count_nonzero(seen >= 0) == r.recalled > 0
+    assert not set(table["cause"][seen >= 0]) & {"never in view", "guard not reached"}
+    cameras = plan.world_T_camera[seen[seen >= 0], :3, 3]
+    assert (np.linalg.norm(cameras - r.heaps[seen >= 0], axis=1) < T.FAR).all()
     assert len(table) == r.n_heaps and table["heap"].tolist() == list(range(r.n_heaps))
     assert np.array_equal(table[["x", "y", "z"]].to_numpy(), r.heaps)
     assert table["cleaned"].dtype == bool and table["cleaned"].tolist() == r.cleaned.tolist()
@@ -268,7 +274,8 @@ def test_summary_and_heap_table_of_a_trial_without_heaps(small):
     _, plan = small
     spire = trimesh.creation.cone(radius=0.2, height=2.0, sections=8)
     r = T.run_trial(machine_from_mesh(spire, name="spire"), plan, params=PARAMS, seed=0)
-    assert r.heap_table().empty and list(r.heap_table().columns) == ["heap", "x", "y", "z", "cleaned", "cause"]
+    assert r.heap_table().empty
+    assert list(r.heap_table().columns) == ["heap", "x", "y", "z", "cleaned", "cause", "seen_by_pose"]
     text = r.summary()
     assert "0 of 0 heaps cleaned (0.0 %)" in text and "misses: none" in text and "reason: no heaps" in text
 

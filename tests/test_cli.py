@@ -393,7 +393,7 @@ def test_clean_writes_a_summary_json_and_one_csv_row_per_heap(cleaned):
     assert "mavac-legend" in (d / "out" / "run.html").read_text()
     doc = _strict_json(d / "out" / "run.json")
     table = pd.read_csv(d / "out" / "run.csv", keep_default_na=False)
-    assert list(table.columns) == ["seed", "heap", "x", "y", "z", "cleaned", "cause"]
+    assert list(table.columns) == ["seed", "heap", "x", "y", "z", "cleaned", "cause", "seen_by_pose"]
     assert table["cleaned"].dtype == bool and sorted(set(table["seed"])) == [0, 1]
     s = doc["summary"]
     assert s["trials"] == 2 and s["heaps"] == len(table) > 0 and s["cleaned"] == table["cleaned"].sum()

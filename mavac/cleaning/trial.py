@@ -112,6 +112,9 @@ class TrialResult:
     replay : mavac.cleaning.replay.Replay or None
         The robot's motion and each heap's removal time on the simulated clock (None when
         nothing ran: no heaps, or an empty plan); :meth:`to_html` plays it.
+    seen_by : (n,) int or None
+        Per heap, the first pose of the plan (a row of ``plan.poses``) whose detection found it
+        (a node matched to it), -1 if none did (scoring only: the match uses the true positions).
     """
 
     machine: str
@@ -138,6 +141,7 @@ class TrialResult:
     wall_s: float = 0.0
     rrt_approach_seconds: list = field(default_factory=list)
     replay: Replay | None = None
+    seen_by: np.ndarray | None = None
 
     @property
     def n_heaps(self) -> int:
@@ -183,8 +187,9 @@ class TrialResult:
 
     def heap_table(self):
         """One row per heap: ``heap`` (index), ``x``, ``y``, ``z`` (true position, m),
-        ``cleaned`` (bool) and ``cause`` (:data:`mavac.cleaning.misses.CAUSES`, ``""`` where
-        cleaned). The trial does not record which guard saw a heap, so there is no such column.
+        ``cleaned`` (bool), ``cause`` (:data:`mavac.cleaning.misses.CAUSES`, ``""`` where
+        cleaned) and ``seen_by_pose`` (the first pose of the plan whose detection found the
+        heap, -1 if none did; a heap vacuumed beside another can be cleaned unseen).
 
         Returns
         -------
@@ -195,7 +200,8 @@ class TrialResult:
         heaps = np.asarray(self.heaps, dtype=float).reshape(-1, 3)
         return pd.DataFrame({"heap": np.arange(len(heaps)), "x": heaps[:, 0], "y": heaps[:, 1], "z": heaps[:, 2],
                              "cleaned": np.asarray(self.cleaned, dtype=bool),
-                             "cause": np.asarray(self.causes).astype(str)})
+                             "cause": np.asarray(self.causes).astype(str),
+                             "seen_by_pose": np.full(len(heaps), -1) if self.seen_by is None else self.seen_by})
 
     def to_html(self, path, machine, *, robot=None):
         """Write the trial's meshcat replay (:func:`mavac.viz.scenes.trial_replay_html`): the
@@ -375,7 +381,9 @@ class _Run:
         mark_blobs(self.events, det.blobs, seg_heaps, heap_of)
         self.result.detected += int(located.sum())
         self.result.true_positives += int(np.count_nonzero(heap_of[located] >= 0))
-        self.matched[heap_of[heap_of >= 0]] = True
+        found = heap_of[heap_of >= 0]
+        self.matched[found] = True
+        self.result.seen_by[found[self.result.seen_by[found] < 0]] = i
         shoulder = self.cell.sim.world_T_link(SHOULDER_LINK)[:3, 3]
         world_T_guard_tool = self.cell.world_T_tool()
         why = filter_nodes(det.nodes, det.depth, shoulder=shoulder, vacuumed=self.vacuumed,
@@ -422,7 +430,8 @@ SHOULDER_LINK = "shoulder_link"
 def _empty_result(name: str, seed: int, heaps, reason: str) -> TrialResult:
     n = len(heaps)
     causes = np.full(n, CAUSES[0], dtype=CAUSE_DTYPE)
-    return TrialResult(name, seed, np.asarray(heaps).reshape(-1, 3), np.zeros(n, dtype=bool), causes, reason=reason)
+    return TrialResult(name, seed, np.asarray(heaps).reshape(-1, 3), np.zeros(n, dtype=bool), causes, reason=reason,
+                       seen_by=np.full(n, -1, dtype=np.int64))
 
 
 def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None = None, seed: int = 0,
