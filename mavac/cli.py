@@ -697,9 +697,8 @@ def _clean_parser(sub, fmt) -> None:
                                    "inspection plan is computed first, as 'mavac inspect' does, or read from "
                                    "the JSON file 'mavac inspect' wrote (--plan). Writes a JSON file "
                                    "(summary, one entry per trial, parameters), a CSV with one row per heap "
-                                   "per trial (position, cleaned, cause of the miss, the pose that saw it) and an HTML replay of the "
-                                   "first trial. The machine should be "
-                                   "0.3-5 m across.")
+                                   "per trial (position, cleaned, cause of the miss, the pose that saw it) and "
+                                   "an HTML replay of the first trial. The machine should be 0.3-5 m across.")
     p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
     p.add_argument("--spacing", type=float, default=None,
                    help="distance between dust heaps, metres (default 0.10, the paper's)")
