@@ -204,7 +204,9 @@ def _intensity(value) -> np.ndarray | None:
     try:
         array = np.load(path, allow_pickle=False) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
     except (ValueError, OSError, EOFError) as exc:  # pickled, truncated, garbage (UnicodeDecodeError too)
-        raise ValueError(f"--intensity {value!r} is not a .npy array or a text file of numbers ({exc})") from None
+        # numpy's own text for a pickle invites allow_pickle, which would run the file's code
+        reason = "it holds pickled Python objects, which are not loaded" if "pickle" in str(exc) else str(exc)
+        raise ValueError(f"--intensity {value!r} is not a .npy array or a text file of numbers ({reason})") from None
     if not isinstance(array, np.ndarray) or array.dtype.kind not in "biuf":
         raise ValueError(f"--intensity {value!r} holds no numeric array (a .npz archive or a structured array)")
     return array.astype(float)
@@ -847,6 +849,11 @@ def main(argv=None) -> int:
             print(f"mavac {args.command}: error: {_with_flag(str(exc))}", file=sys.stderr)
             return 1
         except KeyboardInterrupt:
+            print(f"mavac {args.command}: interrupted", file=sys.stderr)
+            return 130
+        except ImportError as exc:  # Ctrl-C inside a pybind11 module's initialisation (open3d's)
+            if not isinstance(exc.__cause__, KeyboardInterrupt):
+                raise
             print(f"mavac {args.command}: interrupted", file=sys.stderr)
             return 130
 

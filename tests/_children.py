@@ -78,3 +78,28 @@ def end(proc: subprocess.Popen) -> None:
         proc.kill()
     proc.wait(timeout=30)
     proc.stdout.close()
+
+
+def server_left_after(sig: int, code: str = IN_MESHCAT_SCENE) -> bool:
+    """Send ``sig`` to a child inside a meshcat scene (``code``, which prints ``server <pid>``);
+    whether its meshcat server is still running 10 s after the child ended. An orphan found is
+    killed, not left behind."""
+    proc = start(code)
+    server = None
+    try:
+        server = int(wait_line(proc, "server").split()[-1])
+        proc.send_signal(sig)
+        proc.wait(timeout=60)
+        return not gone_within(server, 10)
+    finally:
+        end(proc)
+        if server is not None and alive(server):
+            os.kill(server, 9)
+
+
+def listening_ips(vis) -> set:
+    """The addresses the meshcat server of ``vis`` listens on (ZeroMQ and the web server)."""
+    import psutil
+
+    proc = psutil.Process(vis.window.server_proc.pid)
+    return {c.laddr.ip for c in proc.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN}

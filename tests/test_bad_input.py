@@ -42,7 +42,7 @@ from typing import Callable
 import numpy as np
 import pytest
 import trimesh
-from _children import HALF_WRITTEN_CSV, IN_MESHCAT_SCENE, end, gone_within, start, wait_line
+from _children import HALF_WRITTEN_CSV, end, server_left_after, start, wait_line
 
 import mavac.params as P
 
@@ -191,15 +191,7 @@ def _reachability_map_after_flip() -> bool:
 
 def _meshcat_server_left_after_sigterm() -> bool:
     """SIGTERM a process inside a meshcat scene; whether its server was left running."""
-    proc = start(IN_MESHCAT_SCENE)
-    server = int(wait_line(proc, "server").split()[-1])
-    proc.send_signal(signal.SIGTERM)
-    proc.wait(timeout=60)
-    end(proc)
-    if gone_within(server, 10):
-        return False
-    os.kill(server, signal.SIGKILL)  # the orphan: do not leave it behind
-    return True
+    return server_left_after(signal.SIGTERM)
 
 
 def _files_after_killed_write() -> list:

@@ -315,9 +315,10 @@ def test_a_search_that_finds_no_plan_exits_non_zero_with_strict_json(files, tmp_
     assert plan["status"] == "timed_out" and plan["cost_s"] is None and not plan["setups"]
 
 
-@pytest.mark.parametrize("kind", ["pickled", "truncated", "garbage", "text", "directory", "npz"])
-def test_a_bad_intensity_file_names_the_option(files, tmp_path, capsys, kind):
-    bad = tmp_path / "in" / ("i.npz" if kind == "npz" else "i.txt" if kind == "text" else "i.npy")
+def bad_intensity_file(kind: str, folder: Path) -> Path:
+    """An ``--intensity`` file of ``kind`` (pickled, truncated, garbage, text, directory, npz) in
+    a new ``folder/in``."""
+    bad = folder / "in" / ("i.npz" if kind == "npz" else "i.txt" if kind == "text" else "i.npy")
     bad.parent.mkdir()
     if kind == "pickled":
         np.save(bad, np.array([{"a": 1}], dtype=object), allow_pickle=True)
@@ -332,6 +333,12 @@ def test_a_bad_intensity_file_names_the_option(files, tmp_path, capsys, kind):
         bad.mkdir()
     else:
         np.savez(bad, a=np.full(642, 0.5))
+    return bad
+
+
+@pytest.mark.parametrize("kind", ["pickled", "truncated", "garbage", "text", "directory", "npz"])
+def test_a_bad_intensity_file_names_the_option(files, tmp_path, capsys, kind):
+    bad = bad_intensity_file(kind, tmp_path)
     code, _, err = run(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--quiet",
                         "--intensity", str(bad), "--out", str(tmp_path / "d.html")], capsys)
     assert code == 1 and err.startswith("mavac setups: error: --intensity") and "Traceback" not in err, err

@@ -5,7 +5,7 @@ import signal
 import threading
 
 import pytest
-from _children import IN_MESHCAT_SCENE, alive, end, gone_within, start, wait_line
+from _children import IN_MESHCAT_SCENE, alive, end, gone_within, listening_ips, server_left_after, start, wait_line
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
@@ -68,27 +68,12 @@ def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
 
 def test_the_server_dies_with_a_parent_killed_outright():
     """SIGKILL runs no cleanup: the kernel's parent-death signal ends the server."""
-    proc = start(IN_MESHCAT_SCENE)
-    server = None
-    try:
-        server = int(wait_line(proc, "server").split()[-1])
-        assert alive(server)
-        proc.kill()
-        proc.wait(timeout=30)
-        assert gone_within(server, 10), "meshcat server left running after its parent was killed"
-    finally:
-        end(proc)
-        if server is not None and alive(server):
-            os.kill(server, signal.SIGKILL)
+    assert not server_left_after(signal.SIGKILL), "meshcat server left running after its parent was killed"
 
 
 def test_the_server_listens_on_loopback_only():
-    import psutil
-
     from mavac.viz import meshcat_scene as ms
 
     with ms.scene() as vis:
-        listening = [c.laddr for c in psutil.Process(vis.window.server_proc.pid).net_connections(kind="inet")
-                     if c.status == psutil.CONN_LISTEN]
-    assert len(listening) == 2  # ZeroMQ and the web server
-    assert {addr.ip for addr in listening} == {"127.0.0.1"}, listening
+        listening = listening_ips(vis)
+    assert listening == {"127.0.0.1"}, listening
