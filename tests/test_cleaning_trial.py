@@ -332,3 +332,11 @@ def test_progress_shows_the_poses_visited_and_the_heaps_cleaned_and_changes_noth
     assert _table_row(shown) == _table_row(quiet)
     with pytest.raises(TypeError, match="progress must be True or False"):
         T.run_trial(machine, plan, params=PARAMS, progress="yes")
+
+
+def test_a_robot_other_than_the_plans_is_refused_before_the_simulation(small):
+    from mavac.robots.models import puma560
+
+    machine, plan = small
+    with pytest.raises(ValueError, match="robot 'puma560' is not the plan's robot 'ur10_mobile'"):
+        T.run_trial(machine, plan, robot=puma560())

@@ -666,8 +666,7 @@ def _cases_api():
               else Case(k[0], i, by_id[i].call, by_id[i].error, k[1]) for i, k in BAD_INPUT_CASES.items()]
     return reused + [
         refuse("unclear", "run_trial-robot-puma560-fails-deep-inside", _trial_with_the_puma, (ValueError, TypeError),
-               r"\brobot\b.*(UR10|ur10|plan)", fixed=False,
-               why="run_trial does not check that the robot is the plan's (mavac/cleaning/trial.py, not ours to edit)"),
+               r"\brobot\b.*(UR10|ur10|plan)"),
     ]
 
 

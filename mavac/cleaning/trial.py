@@ -471,6 +471,9 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
     seed = check_seed(seed)
     progress = check_bool("progress", progress)
     check_instance("plan", plan, InspectionPlan)
+    if robot.name != plan.robot_name:  # the guards are joint configurations of the plan's robot
+        raise ValueError(f"robot {robot.name!r} is not the plan's robot {plan.robot_name!r}; plan for it with "
+                         f"plan_inspection(machine, robot=...)")
     heaps = heaps_for_trial(machine, params.dust, seed)
     if not len(heaps):
         return _empty_result(machine.name, seed, heaps, "no heaps: the machine has no upward-facing surface")
