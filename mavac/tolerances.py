@@ -33,6 +33,13 @@ FLOOR_TOLERANCE = 1e-6
 #: cos of the 8 degrees within which a face normal counts as pointing straight down.
 FLOOR_NORMAL_Z = -0.99
 
+#: A surface point is buried in another body of its mesh when it lies more than this (m) inside
+#: that body. Points on the body's boundary (a coplanar face shared by two overlapping boxes,
+#: which is outer surface) are then always kept: their depth is rounding (~1e-16 m relative) or
+#: below trimesh's 1e-8 m band, where ``signed_distance`` returns an unsigned distance. 10 um is
+#: far below the 5 cm spacing of S, so a buried point is kept only within 10 um of a crossing line.
+BURIED_TOLERANCE = 1e-5
+
 #: Setups closer than this (m or rad) are the same setup (n_rfc counts each once): far below
 #: the finest sampling step (25 mm, 5 deg), far above the rounding of ``lo + k * step``.
 SETUP_KEY_QUANTUM = 1e-7

@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ import trimesh
 from mavac.inspection.inspection_plan import plan_from_context, plan_inspection, prepare_offline
 from mavac.planning.tour import short_open_path
 from mavac.params import (GuardParams, InspectionParams, NoSParams, ReachabilityMapParams, SpotParams, Visibility)
+from mavac.tolerances import BURIED_TOLERANCE
 
 FAST = InspectionParams(
     surface_spacing=0.1,
@@ -305,3 +307,49 @@ def test_a_plan_file_on_another_machine_or_tampered_is_refused(plan, ctx):
         InspectionPlan.from_dict({**doc, "robot": "puma"}, ctx.machine)
     with pytest.raises(ValueError, match="has no parameter 'P_x'"):
         InspectionPlan.from_dict({**doc, "params": {**doc["params"], "P_x": 1}}, ctx.machine)
+
+
+def _two_overlapping_boxes():
+    """Two watertight boxes written as one mesh (their faces cross, no boolean union): box a
+    reaches x = 1.0 m, inside box b (x from 0.5 m), and b's lower end lies inside a."""
+    a = trimesh.creation.box(bounds=[[0.0, 0.0, 0.0], [1.0, 0.6, 0.6]])
+    b = trimesh.creation.box(bounds=[[0.5, 0.0, 0.0], [1.5, 0.6, 0.9]])
+    return a, b, trimesh.util.concatenate([a, b])
+
+
+def _strictly_inside(box, points, margin=BURIED_TOLERANCE):
+    lo, hi = box.bounds
+    return np.all((points > lo + margin) & (points < hi - margin), axis=1)
+
+
+def test_surface_elements_buried_inside_another_body_are_dropped():
+    from mavac.geometry.machines import on_floor
+    from mavac.geometry.surface import sample_surface
+    from mavac.inspection.inspection_plan import surface_elements
+
+    a, b, mesh = _two_overlapping_boxes()
+    with pytest.warns(UserWarning, match=r"(\d+) of \d+ surface elements lie inside another body") as said:
+        S = surface_elements(mesh, 0.05, 0)
+    assert not (_strictly_inside(a, S.points) | _strictly_inside(b, S.points)).any()
+    sampled = sample_surface(mesh, 0.05, seed=0)
+    exposed = sampled.subset(~on_floor(sampled.points[:, 2], sampled.normals[:, 2]))
+    buried = _strictly_inside(a, exposed.points) | _strictly_inside(b, exposed.points)
+    assert buried.sum() > 50  # a's x = 1 end and b's part of a's top lie inside the other box
+    assert len(S) == len(exposed) - buried.sum()
+    np.testing.assert_array_equal(S.points, exposed.points[~buried])  # boundary points (y = 0, 0.6) kept
+    assert str(said[0].message).startswith(f"{buried.sum()} of {len(exposed)} ")
+
+
+def test_surface_elements_of_a_single_body_are_the_exposed_samples():
+    from mavac.geometry.machines import on_floor
+    from mavac.geometry.surface import sample_surface
+    from mavac.inspection.inspection_plan import surface_elements
+
+    mesh = _box_machine().mesh
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no buried elements to report
+        S = surface_elements(mesh, 0.05, 0)
+    sampled = sample_surface(mesh, 0.05, seed=0)
+    exposed = sampled.subset(~on_floor(sampled.points[:, 2], sampled.normals[:, 2]))
+    np.testing.assert_array_equal(S.points, exposed.points)
+    np.testing.assert_array_equal(S.normals, exposed.normals)

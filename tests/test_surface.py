@@ -3,7 +3,7 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from mavac.geometry.surface import SurfacePoints, sample_surface
+from mavac.geometry.surface import SurfacePoints, buried, sample_surface
 
 
 @pytest.fixture(scope="module")
@@ -77,3 +77,20 @@ def test_spacing_errors_point_at_a_unit_mistake():
     huge = trimesh.creation.box([400.0, 200.0, 100.0])  # a 40 cm part read in mm as metres
     with pytest.raises(ValueError, match=r"would give 28,000,000 points .* 400 m across: if it is really smaller"):
         sample_surface(huge, 0.1)
+
+
+def test_only_closed_bodies_bury_points():
+    """Box a's end lies inside box b and b's lower end inside a: with one face of b removed,
+    b has no inside, so only b's points inside a are buried."""
+    a = trimesh.creation.box(bounds=[[0.0, 0.0, 0.0], [1.0, 0.6, 0.6]])
+    b = trimesh.creation.box(bounds=[[0.5, 0.0, 0.0], [1.5, 0.6, 0.9]])
+    closed = trimesh.util.concatenate([a, b])
+    sample = sample_surface(closed, 0.05, seed=0)
+    on_b = sample.face_index >= len(a.faces)
+    both = buried(closed, sample)
+    assert both[on_b].any() and both[~on_b].any()
+    b.update_faces(np.arange(1, len(b.faces)))
+    opened = trimesh.util.concatenate([a, b])
+    sample = sample_surface(opened, 0.05, seed=0)
+    only_a = buried(opened, sample)
+    assert only_a.any() and (sample.face_index[only_a] >= len(a.faces)).all()

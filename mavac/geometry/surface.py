@@ -13,7 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import trimesh
+from scipy.spatial import cKDTree
 
+from ..tolerances import BURIED_TOLERANCE
 from ..validate import check_int, check_positive
 from .mesh import check_mesh, local_origin
 
@@ -96,3 +98,57 @@ def sample_surface(mesh: trimesh.Trimesh, spacing: float, seed: int = 0) -> Surf
     face_index = closest["primitive_ids"].numpy().astype(np.int64)
     normals = np.asarray(mesh.face_normals, dtype=np.float64)[face_index]
     return SurfacePoints(points=points, normals=normals, face_index=face_index)
+
+
+def buried(mesh: trimesh.Trimesh, surf: SurfacePoints, tolerance: float = BURIED_TOLERANCE) -> np.ndarray:
+    """Which points of ``surf`` lie strictly inside another body of ``mesh``.
+
+    A mesh may hold several bodies (connected sets of faces, as :meth:`trimesh.Trimesh.split`
+    finds them) that overlap without a boolean union, e.g. two boxes written into one file. A
+    point on a face of body A that lies inside body B is not on the outer surface of the
+    machine: nothing can see or reach it.
+
+    Only bodies that are closed volumes (watertight, consistently wound, positive volume:
+    :attr:`trimesh.Trimesh.is_volume`) can bury points; an open or inside-out body has no
+    well-defined inside and buries nothing. Points of a body are never tested against their own
+    body, so a single body crossing itself is not handled. A mesh of one body returns at once.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The mesh ``surf`` was sampled on (metres).
+    surf : SurfacePoints
+        ``n`` points on ``mesh``; ``surf.face_index`` names the body each lies on.
+    tolerance : float, metres
+        Depth inside another body beyond which a point is buried
+        (:data:`mavac.tolerances.BURIED_TOLERANCE`); points on that body's boundary are kept.
+
+    Returns
+    -------
+    (n,) bool
+        True for the buried points.
+    """
+    out = np.zeros(len(surf), dtype=bool)
+    bodies = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), min_len=1)
+    if len(bodies) < 2:
+        return out
+    body_of_face = np.empty(len(mesh.faces), dtype=np.int64)
+    for i, faces in enumerate(bodies):
+        body_of_face[faces] = i
+    body_of_point = body_of_face[surf.face_index]
+    triangles = np.asarray(mesh.triangles)
+    tree = cKDTree(surf.points)  # finds the points near one body without a pass over all of them
+    for i, faces in enumerate(bodies):
+        if len(faces) < 4:  # no closed body has fewer faces (a tetrahedron); skips triangle soup cheaply
+            continue
+        lo, hi = triangles[faces].min(axis=(0, 1)), triangles[faces].max(axis=(0, 1))
+        # only points deeper than ``tolerance`` inside the bounding box can be deeper inside the body
+        near = np.asarray(tree.query_ball_point((lo + hi) / 2, np.linalg.norm(hi - lo) / 2), dtype=np.int64)
+        near = near[(body_of_point[near] != i) & ~out[near]
+                    & np.all((surf.points[near] > lo + tolerance) & (surf.points[near] < hi - tolerance), axis=1)]
+        if len(near) == 0:
+            continue
+        body = mesh.submesh([faces], append=True)
+        if body.is_volume:
+            out[near] = trimesh.proximity.signed_distance(body, surf.points[near]) > tolerance
+    return out

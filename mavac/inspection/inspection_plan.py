@@ -32,7 +32,7 @@ import trimesh
 from tqdm.auto import tqdm
 
 from ..geometry.machines import Machine, machine_from_mesh, on_floor
-from ..geometry.surface import sample_surface
+from ..geometry.surface import buried, sample_surface
 from ..geometry.transforms import compose, se2_matrices
 from ..io import write_json
 from ..params import InspectionParams
@@ -364,13 +364,43 @@ MAX_SURFACE_ELEMENTS = 100_000
 
 
 def surface_elements(mesh, spacing: float, seed: int):
-    """S on the machine (:class:`mavac.geometry.surface.SurfacePoints`), without the faces
-    standing on the floor (not exposed); ValueError, before sampling, when ``spacing`` would
-    give more than :data:`MAX_SURFACE_ELEMENTS`."""
+    """S on the machine: the exposed part of its surface, sampled about ``spacing`` apart.
+
+    Samples the whole mesh (:func:`mavac.geometry.surface.sample_surface`), then drops the
+    points on faces standing on the floor and the points buried inside another body of the mesh
+    (:func:`mavac.geometry.surface.buried`: overlapping bodies written into one mesh instead of
+    a boolean union; only closed bodies bury points). Neither is exposed, so neither counts in
+    the coverage C. The number of buried points dropped is given in a warning.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The machine, metres, standing on z = 0.
+    spacing : float, metres
+        Distance between neighbouring elements (> 0).
+    seed : int
+        Seed of the sampling.
+
+    Returns
+    -------
+    mavac.geometry.surface.SurfacePoints
+        ``n`` elements: points (n, 3) m, outward unit normals (n, 3), faces (n,).
+
+    Raises
+    ------
+    ValueError
+        Before sampling, when ``spacing`` would give more than :data:`MAX_SURFACE_ELEMENTS`.
+    """
     check_positive("surface_spacing", spacing)
     check_size("surface_spacing", spacing, float(mesh.area) / spacing**2, MAX_SURFACE_ELEMENTS, "surface elements")
     s = sample_surface(mesh, spacing, seed=seed)
-    return s.subset(~on_floor(s.points[:, 2], s.normals[:, 2]))
+    s = s.subset(~on_floor(s.points[:, 2], s.normals[:, 2]))
+    inside = buried(mesh, s)
+    if inside.any():
+        warnings.warn(f"{int(inside.sum())} of {len(s)} surface elements lie inside another body of the mesh "
+                      "(overlapping bodies, not a boolean union) and were dropped: they are not on the "
+                      "machine's outer surface", stacklevel=2)
+    return s.subset(~inside)
 
 
 def _as_machine(mesh_or_machine):
