@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
+import gc
 import hashlib
 import json
 import os
@@ -231,8 +232,13 @@ def _marked_part(args, bar, intensity):
     _next(bar, "marking the stain")
     with warnings.catch_warnings():  # the plan's summary says it
         warnings.filterwarnings("ignore", message=".*larger than the tool tip")
-        return mark_stain(mesh, subdivide=args.subdivide, name=Path(args.part).stem,
+        part = mark_stain(mesh, subdivide=args.subdivide, name=Path(args.part).stem,
                           **_stain_kwargs(args, float(mesh.metadata["mavac_scale"]), intensity))
+    # the part is a copy; the loaded mesh and its trimesh caches (about 0.6 kB per face) sit in
+    # reference cycles that only the cyclic collector frees, and it may not run for minutes
+    del mesh
+    gc.collect()
+    return part
 
 
 #: what the poses of a setup or scrub JSON file mean

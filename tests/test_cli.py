@@ -132,6 +132,31 @@ def test_setups_from_painted_colours_subdivides_large_patches(files, tmp_path, c
     assert code == 0 and "warning: " in out and "larger than the tool tip" in out  # in the summary, once
 
 
+def test_the_loaded_mesh_is_freed_once_the_stain_is_marked(files, monkeypatch):
+    # issue 33: the loaded mesh and its trimesh caches (1.5 GB at 2 M faces) sat in reference
+    # cycles through the whole plan; with the cyclic collector off only an explicit collect frees it
+    import gc
+    import weakref
+
+    loaded = []
+
+    def load(*args):
+        mesh = load_mesh(*args)
+        loaded.append(weakref.ref(mesh))
+        return mesh
+
+    load_mesh = cli._load
+    monkeypatch.setattr(cli, "_load", load)
+    args = cli.build_parser().parse_args(["setups", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60"])
+    monkeypatch.setattr(cli, "_next", lambda *a, **k: None)
+    gc.disable()
+    try:
+        part = cli._marked_part(args, None, None)
+    finally:
+        gc.enable()
+    assert len(part.stain_faces) and loaded[0]() is None
+
+
 def test_reach_writes_a_heat_map_and_a_csv(files, tmp_path, capsys):
     code, out, err = run(["reach", str(files / "cabinet.stl"), "--units", "mm", "--fast", "--quiet",
                           "--out", str(tmp_path / "reach.html")], capsys)

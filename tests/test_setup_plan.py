@@ -162,6 +162,27 @@ def test_causes_classify_each_left_out_patch():
     assert causes.tolist() == ["facing_away", "too_high", "too_far", "missed_by_sampling", "below_support"]
 
 
+def test_the_reach_sphere_test_of_left_out_patches_works_in_blocks():
+    # issue 33: one (grid, patches, 3) block of 300 x 200k patches took 5 GB
+    from mavac.params import SetupSpaceParams
+    from mavac.setups.reach import reach_bound
+    from mavac.setups.unreachable import diagnosis_grid, inside_reach_anywhere
+
+    space = SetupSpaceParams()
+    part = load_part("concave_bowl")
+    bound = reach_bound(robot())
+    rng = np.random.default_rng(3)
+    wrist = part.patch_vertices[::7] * rng.uniform(1.0, 8.0, (1, 1, 1))  # some out of reach
+    wrist = wrist * rng.uniform(0.5, 6.0, (len(wrist), 1, 1))
+    grid = diagnosis_grid(space)
+    whole = inside_reach_anywhere(wrist, grid, space, bound, chunk=len(wrist))
+    assert whole.any() and not whole.all()
+    for chunk in (1, 5, 64):
+        np.testing.assert_array_equal(inside_reach_anywhere(wrist, grid, space, bound, chunk=chunk), whole)
+    with pytest.raises(ValueError, match="chunk"):
+        inside_reach_anywhere(wrist, grid, space, bound, chunk=0)
+
+
 def test_patches_larger_than_the_tool_tip_warn():
     part = small_stain(step=200)
     part.patch_vertices = part.patch_vertices * 1.0

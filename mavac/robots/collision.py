@@ -143,6 +143,18 @@ class CollisionChecker:
                 self._base_pairs.append(k)
                 self._gdata.deactivateCollisionPair(k)
 
+    def reset(self) -> None:
+        """Forget every earlier query: fresh pinocchio and coal data, as a newly built checker has.
+
+        coal's solvers keep state from one query to the next (a warm start), which can flip a
+        borderline contact; a caller that keeps one checker for many batches (its hierarchy of a
+        large obstacle is the costly part) resets it per batch to answer as a new one would.
+        The pairs, the margin and the base pose stay.
+        """
+        self._data = self.robot.model.createData()
+        self._new_geometry_data()
+        self.set_base(self.world_T_base)
+
     def ignore_pairs(self, pairs) -> None:
         """Stop testing the named geometry pairs, e.g. a held part and the flange it sits on.
 

@@ -254,7 +254,7 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
     notes += _dropped_notes(reach_fn, reach.n_rfc)
     if len(setups) == 0:
         refused, notes = _refused_note(live, sampled.setups, np.arange(n), tests, notes)
-        causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, mesh, notes)
+        causes, notes = _left_out(np.arange(n), vertices, normals, area, robot, params, live, notes)
         plan = _no_solution(name, reach.n_rfc, len(sampled.setups), causes, notes, vertices, time.perf_counter() - t0)
         plan.collision_refused = refused
         return plan
@@ -263,7 +263,7 @@ def plan_setups(part, *, robot=None, params: SetupPlanParams | None = None, feas
     patches, reachable = _patches_per_step(cover, res.setups)
     uncoverable = np.asarray(res.uncoverable, dtype=np.int64)
     refused, notes = _refused_note(live, sampled.setups, uncoverable, tests, notes)
-    causes, notes = _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes)
+    causes, notes = _left_out(uncoverable, vertices, normals, area, robot, params, live, notes)
     _warn_all(notes)
     return SetupPlan(
         part_name=name, setups=setups[res.setups], patches=patches, reachable=reachable,
@@ -358,12 +358,13 @@ def _why_dropped(feasible) -> str:
     return str(getattr(feasible, "summary", lambda: "refused by the feasibility test")())
 
 
-def _left_out(uncoverable, vertices, normals, area, robot, params, mesh, notes):
-    """Causes of the uncoverable patches and the warning list with the share left out."""
+def _left_out(uncoverable, vertices, normals, area, robot, params, live: PartReach, notes):
+    """Causes of the uncoverable patches and the warning list with the share left out (the
+    collision test reuses the reach test's checker of the part)."""
     if len(uncoverable) == 0:
         return np.zeros(0, dtype="<U18"), notes
     causes = unreachable_causes(robot, vertices[uncoverable], normals[uncoverable], params.space, params.reach,
-                                part_mesh=mesh)
+                                part_mesh=live.part_mesh, checker=live.checker)
     return causes, notes + [unreachable_message(causes, area[uncoverable], float(area.sum()), len(area))]
 
 

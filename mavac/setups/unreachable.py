@@ -26,7 +26,8 @@ import math
 import numpy as np
 
 from ..params import ReachParams, SetupSpaceParams
-from .reach import below_support, patch_reach, reach_bound, reach_targets
+from ..validate import check_int
+from .reach import ReachBound, below_support, patch_reach, reach_bound, reach_targets
 
 CAUSES = ("below_support", "too_high", "too_far", "facing_away", "occluded", "missed_by_sampling")
 CAUSE_WORDS = {"below_support": "facing down into the table the part rests on (the tool would come from below it)",
@@ -45,7 +46,7 @@ def diagnosis_grid(space: SetupSpaceParams, counts=(5, 5, 12)) -> np.ndarray:
 
 
 def unreachable_causes(robot, patch_vertices, patch_normals, space: SetupSpaceParams,
-                       params: ReachParams | None = None, part_mesh=None, grid=None) -> np.ndarray:
+                       params: ReachParams | None = None, part_mesh=None, grid=None, checker=None) -> np.ndarray:
     """The likely cause for each patch, one of :data:`CAUSES`.
 
     Parameters
@@ -60,6 +61,9 @@ def unreachable_causes(robot, patch_vertices, patch_normals, space: SetupSpacePa
         Needed when ``params.check_collision``.
     grid : (g, 3) float, optional
         Setups tried; default :func:`diagnosis_grid`.
+    checker : CollisionChecker, optional
+        The reach test's :func:`mavac.setups.reach.part_checker` of ``part_mesh``, if the caller
+        has one (else built here when needed).
 
     Returns
     -------
@@ -76,12 +80,10 @@ def unreachable_causes(robot, patch_vertices, patch_normals, space: SetupSpacePa
     nrm = np.asarray(patch_normals, dtype=float).reshape(-1, 3)
     nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
     wrist = v + bound.tool_offset * nrm[:, None, :]  # last-joint origin, part frame (tool z = -n)
-    c, s = np.cos(grid[:, 2]), np.sin(grid[:, 2])
-    wx = c[:, None, None] * wrist[None, :, :, 0] - s[:, None, None] * wrist[None, :, :, 1] + space.origin_x + grid[:, 0, None, None]
-    wy = s[:, None, None] * wrist[None, :, :, 0] + c[:, None, None] * wrist[None, :, :, 1] + space.origin_y + grid[:, 1, None, None]
+    # (grid, patches, 3) blocks of about batch_size floats each: 300 x 200k patches at once was 5 GB
+    chunk = max(1, params.batch_size // (3 * len(grid)))
+    inside_any = inside_reach_anywhere(wrist, grid, space, bound, chunk=chunk)
     dz = wrist[..., 2] + space.table_z - bound.centre[2]
-    d2 = (wx - bound.centre[0]) ** 2 + (wy - bound.centre[1]) ** 2 + dz[None] ** 2
-    inside_any = (d2 <= bound.radius ** 2).all(axis=2).any(axis=0)
     high = np.abs(dz).max(axis=1) > bound.radius
     out[~inside_any] = np.where(high[~inside_any], "too_high", "too_far")
     under = below_support(reach_targets(v, nrm), params.tool_length) if params.support_plane else np.zeros(u, bool)
@@ -97,9 +99,48 @@ def unreachable_causes(robot, patch_vertices, patch_normals, space: SetupSpacePa
     if params.check_collision and part_mesh is not None and ik_any.any():
         keep = todo[ik_any]
         reached = patch_reach(robot, reach_targets(v[keep], nrm[keep]), grid, space, params=params,
-                              part_mesh=part_mesh).any(axis=0)
+                              part_mesh=part_mesh, checker=checker).any(axis=0)
         out[keep[~reached]] = "occluded"
     return out
+
+
+def inside_reach_anywhere(wrist, grid, space: SetupSpaceParams, bound: ReachBound, *,
+                          chunk: int = 1024) -> np.ndarray:
+    """Whether some setup of ``grid`` puts all three wrist points of a patch inside the reach
+    sphere (:func:`mavac.setups.reach.reach_bound`), in blocks of ``chunk`` patches.
+
+    Parameters
+    ----------
+    wrist : (u, 3, 3) float, metres, part frame
+        Last-joint origin for each corner of each patch (tool z = -n).
+    grid : (g, 3) float
+        Setups ``(x [m], y [m], alpha [rad])``.
+    space : SetupSpaceParams
+    bound : ReachBound
+    chunk : int
+        Patches per block; the answer does not depend on it, the memory does
+        (about ``10 * 8 * 3 * g * chunk`` bytes).
+
+    Returns
+    -------
+    (u,) bool
+    """
+    chunk = check_int("chunk", chunk, lo=1)
+    grid = np.asarray(grid, dtype=float).reshape(-1, 3)
+    out = np.zeros(len(wrist), dtype=bool)
+    for a in range(0, len(wrist), chunk):
+        out[a:a + chunk] = _inside_any(wrist[a:a + chunk], grid, space, bound)
+    return out
+
+
+def _inside_any(wrist, grid, space, bound) -> np.ndarray:
+    """:func:`inside_reach_anywhere` of one block of patches, (b,) bool."""
+    c, s = np.cos(grid[:, 2]), np.sin(grid[:, 2])
+    wx = c[:, None, None] * wrist[None, :, :, 0] - s[:, None, None] * wrist[None, :, :, 1] + space.origin_x + grid[:, 0, None, None]
+    wy = s[:, None, None] * wrist[None, :, :, 0] + c[:, None, None] * wrist[None, :, :, 1] + space.origin_y + grid[:, 1, None, None]
+    dz = wrist[..., 2] + space.table_z - bound.centre[2]
+    d2 = (wx - bound.centre[0]) ** 2 + (wy - bound.centre[1]) ** 2 + dz[None] ** 2
+    return (d2 <= bound.radius ** 2).all(axis=2).any(axis=0)
 
 
 def unreachable_message(causes, areas, total_area: float, n_total: int) -> str:
