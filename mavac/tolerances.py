@@ -47,6 +47,15 @@ SETUP_KEY_QUANTUM = 1e-7
 #: vertices shared by faces agree to ~1e-16, distinct ones differ by > 1e-4 m.
 TARGET_DECIMALS = 9
 
+#: Decimals (of a metre) kept of a user's machine mesh in its own frame, after the whole-metre
+#: move of ``machine_from_mesh``: 1 nm. A file's coordinates far from its origin carry float64
+#: noise of |x| * 1.1e-16 (2e-12 m at 10 km, 1e-10 m at 1000 km), which flips surface points
+#: lying on a face that coincides with a grid boundary (e.g. a guard cluster's voxel) from one
+#: cell to the next. Rounding to 1 nm, far above that noise and far below any feature a camera
+#: sees, gives the same numbers as the file written at its origin; a coordinate with at most 9
+#: decimals in metres is kept bit for bit.
+MACHINE_FRAME_DECIMALS = 9
+
 #: Relative slack when a score is compared with the greedy threshold (P x first maximum): a
 #: candidate tying the threshold is kept whatever the last bit of the product.
 GREEDY_TIE_RTOL = 1e-12

@@ -480,11 +480,12 @@ def _C_here_and_10_km_away(suffix: str) -> tuple[float, float]:
 
 
 def _cases_placement():
-    why = ("the float32 cast is fixed (test_visibility), but C still moves with the file's placement: on the "
-           "0.6 m box (--fast) 0.865 -> 0.897 (OBJ, vertices equal to 1e-12 after the whole-metre shift) and "
-           "0.730 -> 0.952 (STL, float32 in the file itself: 0.2 mm at 10 km)")
+    # OBJ: the moved machine is the same mesh bit for bit (machine_from_mesh rounds to 1 nm). STL
+    # stores float32, so 10 km away the box itself moves by up to 0.2 mm: C is equal here (0.944),
+    # but only within the tolerance, not by construction (ties between guard-cluster members and
+    # the 1 cm ring steps of the candidate spots still follow such differences).
     return [answer("wrong", f"C-10-km-away-{suffix[1:]}", functools.partial(_C_here_and_10_km_away, suffix),
-                   lambda C: abs(C[0] - C[1]) < 0.01, fixed=False, why=why) for suffix in (".obj", ".stl")]
+                   lambda C: abs(C[0] - C[1]) < 0.01) for suffix in (".obj", ".stl")]
 
 
 # ---- stain ----

@@ -136,6 +136,28 @@ def test_machine_from_mesh_puts_it_on_the_floor():
     assert box.bounds[0, 2] == pytest.approx(4.85)  # input untouched
 
 
+@pytest.mark.parametrize("shift", [1e4, 1e6])
+def test_a_machine_moved_far_away_has_the_same_mesh_and_guard_targets(shift):
+    """10 km away a file's coordinates carry ~1e-12 m of float64 noise (0.2 -> 0.2000000000007);
+    on the 0.4 m wide box the faces y = +-0.2 lie on guard-cell boundaries (0.2 m), so that noise
+    alone moved points to the next cell and changed the guard targets and C (0.865 -> 0.897)."""
+    from mavac.inspection.guards import guard_targets
+    from mavac.inspection.inspection_plan import surface_elements
+
+    box = trimesh.creation.box([0.6, 0.4, 0.5])
+    here = machine_from_mesh(box)
+    far = machine_from_mesh(box.copy().apply_translation([shift, -shift, 0.0]))
+    np.testing.assert_array_equal(far.mesh.vertices, here.mesh.vertices)  # bit for bit
+    np.testing.assert_array_equal(far.footprint, here.footprint)
+    s, t = (surface_elements(m.mesh, 0.1, 0) for m in (here, far))
+    np.testing.assert_array_equal(guard_targets(t.points, t.normals, 0.2), guard_targets(s.points, s.normals, 0.2))
+
+
+def test_machine_from_mesh_keeps_coordinates_of_9_decimals_bit_for_bit():
+    box = trimesh.creation.box([0.6, 0.4, 0.5])
+    np.testing.assert_array_equal(machine_from_mesh(box).mesh.vertices, box.vertices + [0.0, 0.0, 0.25])
+
+
 def test_machines_do_not_share_cached_arrays():
     a = load_machine("sanding_machine")
     a.mesh.apply_translation([0, 0, 1])

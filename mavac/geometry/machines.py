@@ -45,7 +45,7 @@ import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
-from ..tolerances import FLOOR_NORMAL_Z, FLOOR_TOLERANCE
+from ..tolerances import FLOOR_NORMAL_Z, FLOOR_TOLERANCE, MACHINE_FRAME_DECIMALS
 from ..validate import check_instance, check_points, check_positive, check_range
 from .mesh import check_mesh, local_origin
 from .surface import sample_surface
@@ -375,11 +375,16 @@ def machine_from_mesh(mesh: trimesh.Trimesh, *, name: str = "custom", notes: str
     metres in x and y so its centre is within half a metre of the origin
     (:func:`mavac.geometry.mesh.local_origin`): the plan of a machine does not depend on where the
     file put it, and a mesh already there keeps its x and y. ``Machine.file_offset`` is the move.
+    The moved coordinates are rounded to 1 nm (:data:`mavac.tolerances.MACHINE_FRAME_DECIMALS`):
+    a file 10 km away holds them only to ~1e-12 m, and that noise alone changed which guard cell
+    a point on a face lying on a cell boundary fell in, and so the plan.
     The footprint is the convex hull of its floor shadow.
     """
     copy = check_mesh("mesh", mesh).copy()
     offset = local_origin(copy.vertices) + [0.0, 0.0, copy.bounds[0, 2]]
     copy.apply_translation(-offset)
+    # drop the float64 noise of far-away coordinates, so a moved file gives the same mesh
+    copy.vertices = np.round(copy.vertices, MACHINE_FRAME_DECIMALS) + 0.0  # +0.0: no -0.0
     return Machine(name, copy, footprint_from_mesh(copy), notes, file_offset=offset)
 
 
