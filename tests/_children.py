@@ -103,3 +103,15 @@ def listening_ips(vis) -> set:
 
     proc = psutil.Process(vis.window.server_proc.pid)
     return {c.laddr.ip for c in proc.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN}
+
+
+def print_counts(counts: dict, outcomes, *, total: bool = False) -> None:
+    """An audit's table: one row per class of ``counts`` (``{class: {outcome: n}}``), one column
+    per outcome, the row's total, and with ``total`` a last row summing the classes."""
+    width = max(map(len, outcomes)) + 2
+    rows = dict(counts)
+    if total:
+        rows["all"] = {o: sum(row[o] for row in counts.values()) for o in outcomes}
+    print(f"\n{'class':12s}" + "".join(f"{o:>{width}s}" for o in outcomes) + f"{'total':>8s}")
+    for klass, row in rows.items():
+        print(f"{klass:12s}" + "".join(f"{row[o]:{width}d}" for o in outcomes) + f"{sum(row.values()):8d}")

@@ -42,7 +42,7 @@ from typing import Callable
 import numpy as np
 import pytest
 import trimesh
-from _children import HALF_WRITTEN_CSV, end, server_left_after, start, wait_line
+from _children import HALF_WRITTEN_CSV, end, print_counts, server_left_after, start, wait_line
 
 import mavac.params as P
 
@@ -681,10 +681,7 @@ def _main(argv):
         warnings.simplefilter("ignore")
         print(outcome(next(c for c in HAND_WRITTEN if c.id == argv[1])), flush=True)
         return
-    counts = audit()
-    print(f"\n{'class':12s}" + "".join(f"{o:>11s}" for o in OUTCOMES) + f"{'total':>8s}")
-    for klass, row in counts.items():
-        print(f"{klass:12s}" + "".join(f"{row[o]:11d}" for o in OUTCOMES) + f"{sum(row.values()):8d}")
+    print_counts(audit(), OUTCOMES)
 
 
 if __name__ == "__main__":

@@ -59,7 +59,7 @@ from typing import Callable
 import numpy as np
 import pytest
 import trimesh
-from _children import IN_MESHCAT_SCENE, gone_within, listening_ips, server_left_after
+from _children import IN_MESHCAT_SCENE, gone_within, listening_ips, print_counts, server_left_after
 
 CLASSES = ("unclear", "lost-data", "traceback", "wrong", "accepted", "hang", "memory")
 OUTCOMES = ("ok", "fails", "error", "hang", "memory")
@@ -784,12 +784,7 @@ def _main(argv):
         warnings.simplefilter("ignore")
         print(outcome(next(c for c in CASES if c.id == argv[1])), flush=True)
         return
-    counts = audit()
-    print(f"\n{'class':12s}" + "".join(f"{o:>9s}" for o in OUTCOMES) + f"{'total':>8s}")
-    for klass, row in counts.items():
-        print(f"{klass:12s}" + "".join(f"{row[o]:9d}" for o in OUTCOMES) + f"{sum(row.values()):8d}")
-    total = {o: sum(row[o] for row in counts.values()) for o in OUTCOMES}
-    print(f"{'all':12s}" + "".join(f"{total[o]:9d}" for o in OUTCOMES) + f"{sum(total.values()):8d}")
+    print_counts(audit(), OUTCOMES, total=True)
 
 
 if __name__ == "__main__":
