@@ -3,9 +3,12 @@ of mavac.io, the meshcat scene and the bad-input matrix)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import subprocess
 import sys
+import threading
 import time
 
 # Writes half a CSV through mavac.io.write_csv (target: argv[1]), says "writing", sleeps.
@@ -115,3 +118,23 @@ def print_counts(counts: dict, outcomes, *, total: bool = False) -> None:
     print(f"\n{'class':12s}" + "".join(f"{o:>{width}s}" for o in outcomes) + f"{'total':>8s}")
     for klass, row in rows.items():
         print(f"{klass:12s}" + "".join(f"{row[o]:{width}d}" for o in outcomes) + f"{sum(row.values()):8d}")
+
+
+@contextlib.contextmanager
+def ctrl_c_as_from_a_terminal(servers: list):
+    """SIGINT raises KeyboardInterrupt in the block, as a terminal delivers it, even when the tests
+    run as a background job (SIGINT ignored); another thread is alive, which a process-wide signal
+    may be handed to. On leaving, the handler is restored and any process of ``servers`` (the
+    block fills it) still running is killed, not left behind."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    idle = threading.Event()
+    threading.Thread(target=idle.wait, daemon=True).start()
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        idle.set()
+        for proc in servers:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()

@@ -51,7 +51,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import threading
 import warnings
 from pathlib import Path
 from typing import Callable
@@ -59,7 +58,8 @@ from typing import Callable
 import numpy as np
 import pytest
 import trimesh
-from _children import IN_MESHCAT_SCENE, gone_within, listening_ips, print_counts, server_left_after
+from _children import (IN_MESHCAT_SCENE, ctrl_c_as_from_a_terminal, gone_within, listening_ips, print_counts,
+                       server_left_after)
 
 CLASSES = ("unclear", "lost-data", "traceback", "wrong", "accepted", "hang", "memory")
 OUTCOMES = ("ok", "fails", "error", "hang", "memory")
@@ -327,22 +327,12 @@ def _server_left_after_early_ctrl_c() -> bool:
                 servers.append(self)
                 os.kill(os.getpid(), signal.SIGINT)
 
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as a terminal delivers it
-    idle = threading.Event()  # a thread a process-wide signal may be handed to
-    threading.Thread(target=idle.wait, daemon=True).start()
-    try:
+    with ctrl_c_as_from_a_terminal(servers):
         with replaced(subprocess, "Popen", Recorded), contextlib.suppress(KeyboardInterrupt):
             with scene():
                 pass
         assert servers, "no meshcat server was started"
         return not all(gone_within(p.pid, 10) or p.poll() is not None for p in servers)
-    finally:
-        signal.signal(signal.SIGINT, previous)
-        idle.set()
-        for p in servers:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
 
 
 def _server_addresses() -> set:

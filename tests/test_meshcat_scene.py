@@ -2,10 +2,10 @@
 
 import os
 import signal
-import threading
 
 import pytest
-from _children import IN_MESHCAT_SCENE, alive, end, gone_within, listening_ips, server_left_after, start, wait_line
+from _children import (IN_MESHCAT_SCENE, alive, ctrl_c_as_from_a_terminal, end, gone_within, listening_ips,
+                       server_left_after, start, wait_line)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
@@ -49,21 +49,11 @@ def test_ctrl_c_while_the_server_starts_still_ends_it(monkeypatch):
         return proc, url
 
     monkeypatch.setattr(meshcat_server, "start_server", starting)
-    # Ctrl-C as a terminal delivers it, even when the tests run as a background job (SIGINT ignored)
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    idle = threading.Event()  # another thread, which a process-wide signal may be handed to
-    threading.Thread(target=idle.wait, daemon=True).start()
-    try:
+    with ctrl_c_as_from_a_terminal(servers):
         with pytest.raises(KeyboardInterrupt):
             with ms.scene():
                 pass
         assert servers and servers[0].poll() is not None
-    finally:
-        signal.signal(signal.SIGINT, previous)
-        idle.set()
-        for proc in servers:
-            if proc.poll() is None:
-                proc.kill()
 
 
 def test_the_server_dies_with_a_parent_killed_outright():
