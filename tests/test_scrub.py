@@ -5,6 +5,7 @@ import pybullet as p
 import pytest
 
 from mavac.params import BimanualCellParams, ToolpathParams
+from mavac.robots.kinematics import ik_axis
 from mavac.scrubbing.cell import HOLDER_SEED, cell_robots, holder_ik
 from mavac.scrubbing.coupon import CouponCell, coupon_part
 from mavac.scrubbing.run import paper_lissajous
@@ -327,3 +328,61 @@ def test_snapshot_camera_faces_the_stain_from_its_side():
     assert np.linalg.norm(eye - target) == pytest.approx(SNAPSHOT_DISTANCE)
     assert np.allclose(axis, (target - eye) / np.linalg.norm(target - eye))
     assert eye[1] < target[1] - 0.3 and eye[2] > target[2]  # from the stain's side (-y), a little above
+
+
+def test_replanning_stops_when_a_round_makes_no_progress(monkeypatch):
+    import trimesh
+
+    import mavac.scrubbing.run as run_module
+    from mavac.geometry.stain_marking import mark_stain
+
+    rounds = []
+
+    def nothing_removed(sim, part, patches, q, state, lissajous, toolpath, rng, out, *, label, **kwargs):
+        rounds.append(label)
+        out.rows.append(dict(setup=label))
+        state.images.append(dict(residue_fraction=1.0, mask=np.ones_like(state.face_index, dtype=bool)))
+
+    monkeypatch.setattr(run_module, "execute_setup", nothing_removed)
+    part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 40))
+    run = run_module.run_part(part, fast=False, lissajous=run_module.paper_lissajous("hull"), snapshots=False)
+    assert run.rounds == 0 and rounds and all(label.startswith("round 0") for label in rounds)
+    assert "round 0: no progress" in run.notes[-1]
+
+
+def test_a_setup_whose_pass_start_the_cleaning_arm_cannot_reach_is_noted_not_fatal(monkeypatch):
+    import mavac.scrubbing.scrub as scrub_module
+    from mavac.scrubbing.run import run_part
+
+    def no_solution(model, points, axes, **kwargs):
+        res = ik_axis(model, points, axes, **kwargs)
+        res.success[:] = False
+        return res
+
+    monkeypatch.setattr(scrub_module, "ik_axis", no_solution)
+    run = run_part("hull", fast=True, snapshots=False)
+    assert run.status == "residue left" and not run.execution.rows and run.stain_removed == 0.0
+    assert len(run.notes) == 1 and run.notes[0].startswith("round 0 setup 1 presented but not scrubbed: the cleaning "
+                                                           "arm cannot reach the start of the tool path at [")
+
+
+def test_the_force_loop_measures_the_force_along_the_tool_axis():
+    from types import SimpleNamespace
+
+    from mavac.scrubbing.scrub import _StepLog
+    from mavac.sim.world import ContactTable
+
+    # two pad contacts of 10 N each, their normals 30 deg either side of the tool axis (a pad
+    # across a crease): 17.3 N push the pad back along its axis, not their 20 N sum
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    pad = ContactTable(np.array([7, 7]), np.array([6, 6]), np.array([-1, -1]), np.array([10.0, 10.0]),
+                       np.zeros((2, 3)), np.zeros((2, 3)), np.array([[s, 0.0, c], [-s, 0.0, c]]))
+    none = ContactTable(*(np.zeros(0, int),) * 3, np.zeros(0), *(np.zeros((0, 3)),) * 3)
+    world = SimpleNamespace(contacts_of=lambda body: pad if body == 1 else none)
+    cell = SimpleNamespace(world=world, cleaner=SimpleNamespace(body=1), holder=SimpleNamespace(body=2), part=7,
+                           scrubbed=7, pad_link=6, floor=0)
+    down = np.diag([1.0, -1.0, -1.0])  # tool z into the part, along world -z
+    sched = Schedule(np.zeros((1, 3)), down[None], np.array([[0.0, 0.0, 10.0]]), np.ones(1, bool))
+    log = _StepLog(1)
+    summed, points, normals = log.record(0, cell, False, np.zeros(3), sched)
+    assert log.force[0] == pytest.approx(20 * c) and summed == pytest.approx(20.0) and log.touch[0]

@@ -31,7 +31,7 @@ from .cell import HOLDER_SEED, cell_robots
 from .holding import HeldSetups, check_payload, plan_cell_setups, plan_params_for_cell, setup_configurations
 from .residue import StainState, perceive, residue_faces
 from .scene import SetupMotionError, check_held_start, open_cell, snapshot, stain_overlay, world_T_part
-from .scrub import Execution, execute_setup
+from .scrub import ApproachError, Execution, execute_setup
 from .wear import lissajous_from_vector, stain_opacity, vector_from_lissajous
 
 #: Fast mode: stained faces of the coarse run (ours: a few seconds of scrubbing).
@@ -201,11 +201,17 @@ def run_part(part: str | Part, *, fast: bool, lissajous: LissajousParams | None 
                                   seed=int_seed(seed, "kabir setup motion", rounds, j))
                 except SetupMotionError as exc:  # raised before the setup touches anything
                     notes.append(f"round {rounds} setup {j + 1} skipped: {exc}")
+                except ApproachError as exc:  # the part presented, released again, nothing scrubbed
+                    notes.append(f"round {rounds} setup {j + 1} presented but not scrubbed: {exc}")
             if len(out.rows) == passes_before:  # nothing scrubbed, nothing new to look at
                 break
             last = state.images[-1]
             left, unseen = residue_faces(state, last["mask"], part.stain_faces)
             if last["residue_fraction"] <= cell.clean_residue or rounds >= cell.max_rounds or len(left) == 0:
+                break
+            if np.isin(current.stain_faces, left).all():  # re-planning would repeat this round
+                notes.append(f"round {rounds}: no progress, the camera still sees all {len(current.stain_faces)} "
+                             "faces of this round stained; re-planning stopped")
                 break
             rounds += 1
             current = Part(part.name, part.mesh, left, np.ones(len(left), dtype=np.int64), np.ones(len(left)),

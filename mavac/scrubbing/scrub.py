@@ -84,7 +84,9 @@ class ScrubLog:
     ----------
     t : (m,) float, s
     normal_force : (m,) float, N
-        Measured pad/part contact normal force (0 off the part).
+        Measured pad/part contact force along the tool axis (0 off the part): the contact
+        normal forces summed as vectors and projected on tool z, what the iiwa's joint-torque
+        estimate of the tool-frame force gives (friction left out). The force loop tracks it.
     in_contact : (m,) bool
         The pad touched the part.
     commanded_contact : (m,) bool
@@ -134,7 +136,7 @@ class ScrubLog:
 
     @property
     def mean_contact_force(self) -> float:
-        """Mean measured normal force over the commanded steps in contact, N (nan without contact)."""
+        """Mean measured tool-axis force over the commanded steps in contact, N (nan without contact)."""
         sel = self.in_contact & self.commanded_contact
         return float(self.normal_force[sel].mean()) if sel.any() else float("nan")
 
@@ -258,7 +260,7 @@ class _StepLog:
 
     def record(self, i: int, cell: TwoArmCell, saturated: bool, pad_position, schedule: Schedule):
         """Classify every contact of both arms at step ``i``; returns the pad/part contact
-        ``(normal force (N), points on the part (k, 3), normals (k, 3))`` or None."""
+        ``(summed normal force (N), points on the part (k, 3), normals (k, 3))`` or None."""
         world = cell.world
         mine = world.contacts_of(cell.cleaner.body)
         theirs = world.contacts_of(cell.holder.body)
@@ -276,8 +278,10 @@ class _StepLog:
         self.pads[i], self.saturated[i] = pad_position, saturated
         if not pad.any():
             return None
-        self.force[i], self.touch[i] = mine.normal_force[pad].sum(), True
-        return self.force[i], mine.positions_b[pad], mine.normals[pad]
+        normal, normals = mine.normal_force[pad], mine.normals[pad]
+        # the reaction pushes the pad back, against its axis
+        self.force[i], self.touch[i] = -float((normal @ normals) @ R[:, 2]), True
+        return float(normal.sum()), mine.positions_b[pad], normals
 
 
 class Gains(NamedTuple):
@@ -508,7 +512,11 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
         sched = schedule_for_pass(pp, lissajous, toolpath, cell.world.time_step,
                                   ramp_periods=cell.params.lissajous_ramp_periods)
         if first:
-            approach(cell, sched, toolpath.lift_height_m, lissajous)
+            try:
+                approach(cell, sched, toolpath.lift_height_m, lissajous)
+            except ApproachError:
+                release_part(cell)  # the cleaning arm never left its park
+                raise
             _keep(out, cell, "cleaner")
             first = False
         log = run_schedule(cell, sched, stiffness=lissajous.kappa_x)
@@ -539,10 +547,15 @@ def _keep(out: Execution, cell: TwoArmCell, arm: str) -> None:
     out.tracks.append((*pair, LOG_EVERY * cell.world.time_step))
 
 
+class ApproachError(RuntimeError):
+    """The cleaning arm cannot reach a pass's start with its pad along the pass's axis."""
+
+
 def approach(cell: TwoArmCell, sched: Schedule, lift: float, lissajous: LissajousParams) -> None:
     """Joint motion of the cleaning arm above the schedule's first point, pad along its axis
     (``lift`` m above it, or half that, or on it: the first the arm reaches); checks that the
-    commanded forces stay within the joint torque limits there."""
+    commanded forces stay within the joint torque limits there; raises :class:`ApproachError`
+    when it reaches none."""
     R = sched.rotations[0]
     for h in (lift, lift / 2, 0.0):
         start = sched.positions[0] - h * R[:, 2]
@@ -550,7 +563,8 @@ def approach(cell: TwoArmCell, sched: Schedule, lift: float, lissajous: Lissajou
         if res.success[0]:
             break
     else:
-        raise RuntimeError("the cleaning arm cannot reach the start of the tool path")
+        raise ApproachError(f"the cleaning arm cannot reach the start of the tool path at {np.round(sched.positions[0], 3)} m "
+                            f"with its pad along {np.round(R[:, 2], 2)}")
     peak = np.array([lissajous.A_x, lissajous.A_y, lissajous.f_n])
     check_force_limits(cell.cleaner_model, res.q[0], R, peak, name="lissajous (f_n, A_x, A_y)")
     move_cleaner(cell, res.q[0])
