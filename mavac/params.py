@@ -928,9 +928,12 @@ class BimanualCellParams(CheckedFields):
     # of pinocchio's gravity compensation.
     kp: float = ranged(600.0, gt=0.0)
     kd: float = ranged(40.0, gt=0.0)
-    # Ours: rotational stiffness (N m/rad) and damping ratio of the cleaning arm's Cartesian
-    # impedance; translational stiffness in the tool plane is kappa of LissajousParams.
+    # Ours: rotational stiffness (N m/rad) of the cleaning arm's Cartesian impedance;
+    # translational stiffness in the tool plane is kappa of LissajousParams.
     rot_stiffness: float = ranged(150.0, gt=0.0)
+    # Damping ratio of every Cartesian axis, for the arm's real Cartesian inertia at the pad
+    # (factorization design, scrub.cartesian_damping): 0.7, the default of KUKA Sunrise's
+    # Cartesian impedance mode.
     damping_ratio: float = ranged(0.7, gt=0.0)
     # Ours: integral gain (1/s) of the explicit normal-force loop along tool z, tuned on the
     # coupon stroke (tests/test_scrub.py): 6/s left the mean contact force 36 % above f_n on
@@ -953,12 +956,6 @@ class BimanualCellParams(CheckedFields):
     image_size: int = ranged(128, ge=16, le=1024)
     # Ours: the part counts as clean when the residue is below this fraction of its stained pixels.
     clean_residue: float = ranged(0.02, ge=0.0, le=1.0)
-    # Apparent mass (kg) of the iiwa at the pad along the tool axes: the one value of
-    # ScrubModel.mass, which the impedance damping 2 zeta sqrt(kappa m) shares with the wear model.
-    apparent_mass: float = ranged(ScrubModel.mass, gt=0.0)
-    # Ours: apparent rotational inertia (kg m^2) of the wrist for the rotational damping
-    # 2 zeta sqrt(k_r I), about that of a 3 kg wrist at ~8 cm.
-    wrist_inertia: float = ranged(0.02, gt=0.0)
     # Ours: null-space posture stiffness (N m/rad) and damping (N m s/rad) of the redundant
     # iiwa while scrubbing: weak, so the pull towards the start posture never fights the task.
     null_stiffness: float = ranged(2.0, gt=0.0)
@@ -967,6 +964,12 @@ class BimanualCellParams(CheckedFields):
     # only while the pad touches the part and restarts from 0 when contact is lost (conditional
     # integration, the standard anti-windup), so the clip is a last resort.
     force_integral_limit: float = ranged(2.0, gt=0.0)
+    # Ours: a coupon stroke of the GPR learner counts as failed (C_p = 0, whatever it removed)
+    # unless the pad stayed on the coupon for this share of the commanded contact steps and the
+    # mean force over all of them stayed within this fraction of f_n: the cell must hold the
+    # commanded contact before its cleaning is credited (the acceptance figures of the cell).
+    tracking_duty: float = ranged(0.95, ge=0.0, le=1.0)
+    tracking_force_error: float = ranged(0.10, gt=0.0)
     # Ours: the Lissajous force ramps in linearly over this many periods of its slower (y)
     # axis after each landing, so the pad settles under f_n before it is pushed sideways
     # (Kabir Sec. VIII overlays the oscillation on the path but says nothing of its start).

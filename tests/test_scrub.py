@@ -1,5 +1,7 @@
 """The simulated two-arm cell (mavac.scrubbing.scene, .scrub, .coupon)."""
 
+import dataclasses
+
 import numpy as np
 import pybullet as p
 import pytest
@@ -160,17 +162,10 @@ def test_a_setup_the_holding_arm_cannot_reach_is_skipped_with_a_note(monkeypatch
     assert run.stain_removed == 0.0 and run.to_dict()["setups"] == []
 
 
-def test_cell_gains_limits_and_masses_are_parameters():
-    import dataclasses
-
-    from mavac.params import ScrubModel
-    from mavac.scrubbing.scrub import Gains
-
-    assert CELL.apparent_mass == ScrubModel().mass  # one home: the wear model's apparent mass
-    g = Gains.of(dataclasses.replace(CELL, apparent_mass=4 * CELL.apparent_mass), 5000.0)
-    assert g.d == pytest.approx(2 * Gains.of(CELL, 5000.0).d)
+def test_cell_gains_and_limits_are_checked_parameters():
     for name, bad in (("brake_torque", 0.0), ("park_margin", -0.1), ("setup_rrt_iterations", 0),
-                      ("wrist_inertia", -1.0), ("force_integral_limit", 0.0)):
+                      ("damping_ratio", 0.0), ("force_integral_limit", 0.0), ("tracking_duty", 1.5),
+                      ("tracking_force_error", 0.0)):
         with pytest.raises(ValueError, match=name):
             dataclasses.replace(CELL, **{name: bad})
 
@@ -212,7 +207,7 @@ def test_any_contact_but_the_pad_fails_the_pass():
 
 
 def test_force_integral_only_while_the_pad_is_on_the_part():
-    from mavac.scrubbing.scrub import Gains, _scrub_torques
+    from mavac.scrubbing.scrub import Gains, _scrub_torques, schedule_twists
 
     cleaner, _ = cell_robots(CELL)
     robot = cleaner.model
@@ -228,7 +223,7 @@ def test_force_integral_only_while_the_pad_is_on_the_part():
     sched = Schedule(np.tile(T.translation, (n, 1)), np.repeat(T.rotation[None], n, 0),
                      np.tile([0.0, 0.0, 10.0], (n, 1)), np.ones(n, bool))
     g = Gains.of(CELL, 5000.0)
-    state = {"integral": 0.0, "touch": False, "saturated": False}
+    state = {"integral": 0.0, "touch": False, "saturated": False, "twists": schedule_twists(sched, 0.002)}
     for i in range(n):  # off the part, 0 N measured: nothing may wind up
         _scrub_torques(robot, q, dq, J, T, sched, i, g, state, 0.0, 0.002)
         assert state["integral"] == 0.0 and not state["saturated"]
@@ -386,3 +381,32 @@ def test_the_force_loop_measures_the_force_along_the_tool_axis():
     log = _StepLog(1)
     summed, points, normals = log.record(0, cell, False, np.zeros(3), sched)
     assert log.force[0] == pytest.approx(20 * c) and summed == pytest.approx(20.0) and log.touch[0]
+
+
+def test_a_coupon_stroke_that_does_not_hold_contact_is_a_failed_experiment():
+    x = np.array([BOWL.v, BOWL.f_n, BOWL.kappa_x, BOWL.f_x, BOWL.A_x])
+    with CouponCell(CELL) as coupon:
+        held = coupon(x)
+        row = coupon.stroke_row(x)
+        assert held > 0.1 and coupon.held_contact(row) and row["duty"] >= CELL.tracking_duty
+    strict = dataclasses.replace(CELL, tracking_force_error=1e-9)  # no stroke tracks f_n this well
+    with CouponCell(strict) as coupon:
+        assert coupon(x) == 0.0 and not coupon.held_contact(coupon.stroke_row(x))
+        with pytest.raises(ValueError, match="x: no stroke was run"):
+            coupon.stroke_row(x + 1.0)
+    off = dict(row, duty=0.9)
+    assert not coupon.held_contact(off) and not coupon.held_contact(dict(row, force_error_all=-0.2))
+
+
+def test_the_damping_acts_on_the_error_to_the_schedules_own_motion():
+    from scipy.spatial.transform import Rotation
+
+    from mavac.scrubbing.scrub import schedule_twists
+
+    # 0.1 m/s along x while turning at 0.5 rad/s about z
+    dt, m = 0.002, 50
+    t = np.arange(m) * dt
+    R = Rotation.from_rotvec(np.outer(0.5 * t, [0.0, 0.0, 1.0])).as_matrix()
+    sched = Schedule(np.column_stack([0.1 * t, np.zeros(m), np.zeros(m)]), R, np.zeros((m, 3)), np.ones(m, bool))
+    twists = schedule_twists(sched, dt)
+    assert twists == pytest.approx(np.tile([0.1, 0.0, 0.0, 0.0, 0.0, 0.5], (m, 1)))

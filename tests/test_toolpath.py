@@ -272,3 +272,39 @@ def test_sweep_frame_keeps_strips_even_on_curved_stains_and_long_on_flat_ones():
     part = make_part(cyl, np.arange(len(cyl.faces)))
     tp = toolpath_for_setup(part, np.eye(4), np.arange(len(cyl.faces)), PARAMS)
     assert tp.coverage[0] >= 0.98
+
+
+def test_the_pad_axis_is_the_plane_it_rests_on_not_one_face_normal():
+    from mavac.scrubbing.toolpath import _Surface
+
+    # a roof: two 20-degree slopes meeting at a ridge along y, in 2 mm triangles
+    x = np.linspace(-0.1, 0.1, 101)
+    y = np.linspace(-0.05, 0.05, 51)
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    Z = -np.abs(X) * np.tan(np.radians(20))
+    idx = np.arange(X.size).reshape(X.shape)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    roof = trimesh.Trimesh(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]),
+                           np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])]), process=False)
+    surface = _Surface(roof, roof, 0.03)
+    ridge, slope = np.array([[0.0, 0.0, 0.0], [0.05, 0.0, -0.05 * np.tan(np.radians(20))]])
+    n_ridge, n_slope = surface.stain_normals(np.array([ridge, slope]))
+    # on the ridge the pad straddles both slopes: its axis is vertical, not one slope's normal
+    assert n_ridge == pytest.approx([0.0, 0.0, 1.0], abs=1e-6)
+    # a pad radius away from it, the pad lies on one slope
+    tilt = np.radians(20)
+    assert n_slope == pytest.approx([np.sin(tilt), 0.0, np.cos(tilt)], abs=1e-6)
+
+
+def test_a_piece_of_coincident_waypoints_makes_no_segment(monkeypatch):
+    import mavac.scrubbing.toolpath as toolpath
+
+    mesh = height_field()
+    part = make_part(mesh, np.arange(len(mesh.faces)))
+    fit = toolpath._fit_spline
+    # the first piece's waypoints all coincide (as the spline fit returns them: one point)
+    monkeypatch.setattr(toolpath, "_fit_spline", lambda pts: fit(pts)[:1] if pts[0, 0] < -0.05 else fit(pts))
+    reach = lambda p, a: np.abs(p[:, 0]) > 0.04  # noqa: E731 (two separate pieces per plane)
+    tp = toolpath_for_setup(part, np.eye(4), np.arange(len(mesh.faces)), PARAMS, plane_normal=[0, 1, 0],
+                            reachable=reach)
+    assert tp.passes[0].segments and all(len(seg) >= 2 for seg in tp.passes[0].segments)

@@ -83,7 +83,7 @@ def table7(runs: dict) -> pd.DataFrame:
 #: :meth:`mavac.scrubbing.scrub.ScrubLog.row`, then what the camera saw.
 EXECUTION_COLUMNS = ["part", "parameters", "setup", "pass", "path_length_m", "commanded_steps", "contact_steps",
                      "duty", "contact_s", "f_n_n", "mean_force_all_n", "force_error_all", "force_rms_all",
-                     "mean_normal_force_n", "force_error_contact", "force_rms_contact", "integral_saturated_steps",
+                     "mean_force_contact_n", "force_error_contact", "force_rms_contact", "integral_saturated_steps",
                      "integral_saturated_share", "nonpad_part_steps", "nonpad_part_peak_n", "arm_arm_steps",
                      "arm_arm_peak_n", "arm_floor_steps", "arm_floor_peak_n", "pad_touch_outside_steps", "failed",
                      "max_deviation_mm", "wear_depth_max_mm", "sliding_m", "residue_fraction", "C_p"]

@@ -63,7 +63,11 @@ class CouponCell:
     The holding arm presents the coupon at :data:`COUPON_SETUP`; the cleaning arm makes one
     60 mm stroke along the stain strip with the operation vector ``x = (v, f_n, kappa, f_x,
     A_x)`` (:func:`mavac.scrubbing.wear.lissajous_from_vector`); the stain camera and K-means
-    measure C_p. Use as a context manager (the pybullet client is closed on exit).
+    measure C_p. A stroke in which the cell did not hold the commanded contact (pad on the coupon
+    for less than ``cell.tracking_duty`` of the commanded steps, or a mean force over them more
+    than ``cell.tracking_force_error`` x f_n off) is a failed experiment: C_p = 0. Each stroke's
+    contact measures (:meth:`mavac.scrubbing.scrub.ScrubLog.row`) are kept in :attr:`strokes`.
+    Use as a context manager (the pybullet client is closed on exit).
 
     Parameters
     ----------
@@ -82,6 +86,7 @@ class CouponCell:
         self.cleaner, self.holder = cell_robots(cell, toolpath)
         self.world = None
         self._memo = {}
+        self.strokes = {}
 
     def __enter__(self):
         T = base_T_part(np.array([COUPON_SETUP]), self.params.space)
@@ -109,13 +114,28 @@ class CouponCell:
     def __call__(self, x, rng: np.random.Generator | None = None) -> float:
         """C_p of one stroke at ``x``. Its process and pixel noise come from the seed and ``x``
         (not from ``rng``), so learners with other thresholds share the runs at the same point."""
-        key = tuple(np.round(np.asarray(x, float), 9).tolist())
+        key = _key(x)
         if key not in self._memo:
             words = np.frombuffer(np.asarray(key).tobytes(), np.uint32).tolist()
-            self._memo[key] = self._stroke(np.asarray(key), rng_for(self.seed, "coupon stroke", *words))
+            rng = rng_for(self.seed, "coupon stroke", *words)
+            self._memo[key], self.strokes[key] = self._stroke(np.asarray(key), rng)
         return self._memo[key]
 
-    def _stroke(self, x, rng: np.random.Generator) -> float:
+    def stroke_row(self, x) -> dict:
+        """Contact measures (:meth:`mavac.scrubbing.scrub.ScrubLog.row`) of the stroke run at
+        operation vector ``x`` (5,); ValueError if none was."""
+        row = self.strokes.get(_key(x))
+        if row is None:
+            raise ValueError(f"x: no stroke was run at {np.round(np.asarray(x, float), 4).tolist()}")
+        return row
+
+    def held_contact(self, row: dict) -> bool:
+        """Whether a stroke's contact measures (:meth:`mavac.scrubbing.scrub.ScrubLog.row`) meet
+        the cell's tracking rule (see the class docstring)."""
+        cell = self.params
+        return row["duty"] >= cell.tracking_duty and abs(row["force_error_all"]) <= cell.tracking_force_error
+
+    def _stroke(self, x, rng: np.random.Generator) -> tuple[float, dict]:
         lis = lissajous_from_vector(np.asarray(x, float)[None])
         state = StainState.from_part(self.part, rng_for(self.seed, "coupon hardness"), image_size=COUPON_IMAGE)
         sched = schedule_for_pass(self.stroke, lis, self.toolpath, self.world.time_step,
@@ -132,4 +152,11 @@ class CouponCell:
         cleaner.reset_q(self.q_start)
         cleaner.brake(self.q_start, brake_torque)
         self.world.step(RESET_STEPS)
-        return float(perceive(state, before, self.part.stain_faces, rng)["C_p"])
+        row = log.row()
+        c_p = float(perceive(state, before, self.part.stain_faces, rng)["C_p"])
+        return (c_p if self.held_contact(row) else 0.0), row
+
+
+def _key(x) -> tuple:
+    """Memo key of an operation vector (5,): its values rounded to 1e-9."""
+    return tuple(np.round(np.asarray(x, float), 9).tolist())

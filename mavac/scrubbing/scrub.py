@@ -5,16 +5,19 @@
   previous pass), the contact segments with the Lissajous overlay ramped in, the repositioning
   moves in free motion; an oscillation wider than the pad is refused;
 * :func:`run_schedule` makes the cleaning arm follow it in torque mode: Cartesian impedance
-  with stiffness kappa in the tool plane, explicit force control (f_n plus an integral of the
-  measured force error, integrated only while the pad is on the part and restarted from 0 when
-  it leaves) along tool z, the Lissajous force as feed-forward, pinocchio gravity compensation
-  (:class:`Gains`, from :class:`mavac.params.BimanualCellParams`). It logs every contact of
+  with stiffness kappa in the tool plane and damping for the arm's real Cartesian inertia
+  (:func:`mavac.sim.control.cartesian_damping`), explicit force control along tool z (f_n plus
+  an integral of the error of the contact force measured along that axis, integrated only while
+  the pad is on the part and restarted from 0 when it leaves), the Lissajous force as
+  feed-forward, pinocchio gravity compensation (:class:`Gains`, from
+  :class:`mavac.params.BimanualCellParams`). It logs every contact of
   both arms at every step (:meth:`ScrubLog.row`) and accumulates, per stain face under the
   pad, the Preston removal ``preston x pressure x sliding`` (pressure = measured normal force /
   pad area, sliding = measured relative pad/part velocity x dt);
 * :func:`execute_setup` moves the part to a setup, fixes it as its exact mesh
-  (:func:`mavac.scrubbing.scene.fix_part`), scrubs every pass of its tool path and looks after
-  each (:mod:`mavac.scrubbing.residue`).
+  (:func:`mavac.scrubbing.scene.fix_part`), plans its tool path on the waypoints the pad reaches
+  with nothing else touching (:class:`mavac.scrubbing.clearance.ToolClearance`), scrubs every
+  pass and looks after each (:mod:`mavac.scrubbing.residue`).
 """
 
 from __future__ import annotations
@@ -29,14 +32,15 @@ from scipy.spatial.transform import Rotation, Slerp
 from ..geometry.parts import Part
 from ..params import BimanualCellParams, LissajousParams, ToolpathParams
 from ..robots.kinematics import ik_axis
-from ..sim.control import gravity_torques
+from ..sim.control import cartesian_damping, gravity_torques
 from ..sim.world import transforms_from_poses
 from ..validate import check_array, check_instance
 from .cell import CLEANER_PARK
-from .lissajous import check_excursion, overlay_path
+from .clearance import ToolClearance
+from .lissajous import check_excursion, excursion, overlay_path
 from .residue import StainState, perceive
 from .scene import LOG_EVERY, TwoArmCell, fix_part, move_cleaner, move_holder, release_part, world_T_part
-from .toolpath import PassPath, reachable_from_robot, toolpath_for_setup
+from .toolpath import PassPath, toolpath_for_setup
 from .wear import ContactWear
 
 #: Steps between the cleaning arm configurations kept for replays.
@@ -159,7 +163,7 @@ class ScrubLog:
         return dict(commanded_steps=int(cmd.sum()), contact_steps=int(on.sum()), duty=float(on.sum() / cmd.sum()),
                     contact_s=self.contact_s, f_n_n=f_n, mean_force_all_n=float(f_all.mean()),
                     force_error_all=error_all, force_rms_all=rms_all,
-                    mean_normal_force_n=self.mean_contact_force,
+                    mean_force_contact_n=self.mean_contact_force,
                     force_error_contact=error_on, force_rms_contact=rms_on,
                     integral_saturated_steps=int(self.saturated[cmd].sum()),
                     integral_saturated_share=float(self.saturated[cmd].mean()),
@@ -225,6 +229,7 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
     log = _StepLog(m)
     state = {"integral": 0.0, "sliding": 0.0, "touch": False, "saturated": False}
     kept, contacts = [], []
+    state["twists"] = schedule_twists(schedule, dt)
     for i in range(m):
         q, dq = c.state()
         if i % REPLAY_EVERY == 0:
@@ -238,7 +243,9 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
         c.apply_torques_unchecked(tau + np.array(pin.computeGeneralizedGravity(robot, gravity_data, q)))
         cell.world.step_once()
         pad = log.record(i, cell, state["saturated"], T.translation, schedule)
-        state["touch"] = pad is not None
+        # the loop integrates only while the pad presses on the part (its axial force > 0): a pad
+        # pushed from behind (through a thin wall of the mesh) must not wind the integral up
+        state["touch"] = pad is not None and log.force[i] > 0
         if pad is not None:
             contacts.append(_contact_step(cell, pad, J @ dq, schedule.rotations[i][:, 2], state, dt))
     wear = ContactWear(cell.part_mesh, np.sqrt(cell.pad_area / np.pi), cell.params.preston,
@@ -248,6 +255,19 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
                     np.where(schedule.contact, schedule.forces[:, 2], 0.0), log.saturated, log.other,
                     log.other_count, log.deviation, log.pads, wear.removal, state["sliding"], wear.deepest,
                     np.array(kept))
+
+
+def schedule_twists(schedule: Schedule, dt: float) -> np.ndarray:
+    """(m, 6) twist of the schedule's nominal pad frame (world-aligned linear m/s, angular
+    rad/s), by finite differences over ``dt`` s (the last sample repeats the one before)."""
+    m = len(schedule.positions)
+    twists = np.zeros((m, 6))
+    if m > 1:
+        R = schedule.rotations
+        twists[:-1, :3] = np.diff(schedule.positions, axis=0) / dt
+        twists[:-1, 3:] = Rotation.from_matrix(R[1:] @ np.transpose(R[:-1], (0, 2, 1))).as_rotvec() / dt
+        twists[-1] = twists[-2]
+    return twists
 
 
 class _StepLog:
@@ -289,11 +309,12 @@ class Gains(NamedTuple):
 
     Attributes
     ----------
-    k, d : float
-        Tool-plane stiffness kappa (N/m) and damping ``2 zeta sqrt(kappa m)`` (N s/m), ``m`` the
-        apparent mass; ``d`` also damps tool z under force control.
-    kr, dr : float
-        Rotational stiffness (N m/rad) and damping ``2 zeta sqrt(k_r I)`` (N m s/rad).
+    k : float
+        Tool-plane stiffness kappa, N/m (also along tool z while repositioning).
+    kr : float
+        Rotational stiffness, N m/rad.
+    zeta : float
+        Damping ratio of every Cartesian axis (:func:`cartesian_damping`).
     ki : float
         Integral gain of the normal-force loop, 1/s.
     windup : float
@@ -303,9 +324,8 @@ class Gains(NamedTuple):
     """
 
     k: float
-    d: float
     kr: float
-    dr: float
+    zeta: float
     ki: float
     windup: float
     kn: float
@@ -314,9 +334,7 @@ class Gains(NamedTuple):
     @classmethod
     def of(cls, params: BimanualCellParams, stiffness: float) -> Gains:
         """The gains for tool-plane stiffness ``stiffness`` (N/m) in the cell ``params``."""
-        zeta = params.damping_ratio
-        return cls(float(stiffness), 2 * zeta * np.sqrt(stiffness * params.apparent_mass), params.rot_stiffness,
-                   2 * zeta * np.sqrt(params.rot_stiffness * params.wrist_inertia), params.force_gain,
+        return cls(float(stiffness), params.rot_stiffness, params.damping_ratio, params.force_gain,
                    params.force_integral_limit, params.null_stiffness, params.null_damping)
 
 
@@ -326,7 +344,6 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
     R = schedule.rotations[i]
     e_t = R.T @ (schedule.positions[i] - T.translation)
     v = J @ dq
-    v_t = R.T @ v[:3]
     f_cmd = schedule.forces[i]
     state["saturated"] = False
     if schedule.contact[i] and state["touch"]:  # conditional integration: only on the part
@@ -335,15 +352,13 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
         state["saturated"] = state["integral"] != raw
     else:  # off the part or repositioning: the integral restarts from 0
         state["integral"] = 0.0
-    if schedule.contact[i]:
-        fz = f_cmd[2] + state["integral"] - g.d * v_t[2]
-    else:
-        fz = g.k * e_t[2] - g.d * v_t[2]
-    F_t = np.array([g.k * e_t[0] - g.d * v_t[0] + f_cmd[0], g.k * e_t[1] - g.d * v_t[1] + f_cmd[1], fz])
-    moment = g.kr * pin.log3(R @ T.rotation.T) - g.dr * v[3:]
-    # spin about the pad axis is free (a round pad): no stiffness or damping on link 7's tiny inertia
-    moment -= R[:, 2] * (R[:, 2] @ moment)
-    wrench = np.concatenate([R @ F_t, moment])
+    fz = f_cmd[2] + state["integral"] if schedule.contact[i] else g.k * e_t[2]
+    F_t = np.array([g.k * e_t[0] + f_cmd[0], g.k * e_t[1] + f_cmd[1], fz])
+    wrench = np.concatenate([R @ F_t, g.kr * pin.log3(R @ T.rotation.T)])
+    D = cartesian_damping(robot, state.setdefault("mass_data", robot.createData()), q, J, g.k, g.kr, g.zeta)
+    wrench -= D @ (v - state["twists"][i])  # damping of the error to the schedule's own motion
+    # spin about the pad axis is free (a round pad)
+    wrench[3:] -= R[:, 2] * (R[:, 2] @ wrench[3:])
     J_pinv = np.linalg.pinv(J)
     null = np.eye(len(q)) - J.T @ J_pinv.T
     q_rest = state.setdefault("q_rest", q.copy())
@@ -441,7 +456,7 @@ class Execution:
     setup_times : list of float
         Holding-arm motion time of each setup, s (first round first).
     forces : list of (k,) float
-        Measured normal force at every contact step of each pass, N.
+        Measured contact force along the tool axis at every contact step of each pass, N.
     snapshots : list of (str, (H, W, 3) uint8)
         pybullet camera snapshots (label, image).
     stain_images : list of (H, W, 3) uint8
@@ -502,7 +517,8 @@ def execute_setup(cell: TwoArmCell, part: Part, patches, q_holder, state: StainS
     T = world_T_part(cell)
     out.setups.append(dict(label=label, world_T_part=T, q_holder=np.asarray(q_holder, float).copy(),
                            patches=len(patches), first_row=len(out.rows)))
-    tp = toolpath_for_setup(part, T, np.asarray(patches), toolpath, reachable=reachable_from_robot(cell.cleaner_model))
+    clear = ToolClearance(cell.cleaner_model, part.mesh.copy().apply_transform(T), sweep=excursion(lissajous))
+    tp = toolpath_for_setup(part, T, np.asarray(patches), toolpath, reachable=clear)
     if snapshot is not None:
         out.snapshots.append((f"{label} before cleaning", snapshot(cell, state)))
     first = True
@@ -563,8 +579,8 @@ def approach(cell: TwoArmCell, sched: Schedule, lift: float, lissajous: Lissajou
         if res.success[0]:
             break
     else:
-        raise ApproachError(f"the cleaning arm cannot reach the start of the tool path at {np.round(sched.positions[0], 3)} m "
-                            f"with its pad along {np.round(R[:, 2], 2)}")
+        raise ApproachError(f"the cleaning arm cannot reach the start of the tool path at "
+                            f"{np.round(sched.positions[0], 3)} m with its pad along {np.round(R[:, 2], 2)}")
     peak = np.array([lissajous.A_x, lissajous.A_y, lissajous.f_n])
     check_force_limits(cell.cleaner_model, res.q[0], R, peak, name="lissajous (f_n, A_x, A_y)")
     move_cleaner(cell, res.q[0])

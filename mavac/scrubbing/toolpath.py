@@ -12,8 +12,9 @@ of the setup, pass 2 those needing 2 or 3, ...). For each pass:
    across its longest extent, so the sweeps are long and few (:func:`sweep_frame`).
 3. Each section curve is resampled at the waypoint spacing; the curves of a component are
    visited in boustrophedon order (alternate sweep direction from one plane to the next).
-4. Waypoints the robot cannot reach with tool z = -n (outward face normal under the
-   waypoint) are dropped, splitting the curve there.
+4. Waypoints the robot cannot reach with tool z = -n are dropped, splitting the curve there;
+   n is the outward normal of the plane the flat pad rests on (the area-weighted mean normal
+   of the part's faces within the pad's radius, on the stain's side).
 5. Consecutive pieces are joined in contact when the straight link between them, projected
    on the part, stays on the pass's stain (within 5 % of the tool width) with no gap larger
    than two waypoint spacings and is reachable; otherwise by a repositioning move: lift along
@@ -366,10 +367,26 @@ class _Surface:
         self.part = part_world
         self.stain = stain
         self.tol = _ON_STAIN_TOLERANCE * tool_width
+        self.radius = tool_width / 2
+        self._faces = None  # KD-tree of the part's face centres, built on first use
 
     def stain_normals(self, points: np.ndarray) -> np.ndarray:
+        """The pad's outward axis at each point (n, 3), unit: the area-weighted mean normal of the
+        part's faces within the pad's radius, those facing the way the closest stain face does
+        (the plane a flat pad rests on; one face's normal turns it abruptly over a crease)."""
         _, _, tri = trimesh.proximity.closest_point(self.stain, points)
-        return self.stain.face_normals[tri]
+        own = self.stain.face_normals[tri]
+        if self._faces is None:
+            self._faces = cKDTree(self.part.triangles_center)
+        normals, areas = self.part.face_normals, self.part.area_faces
+        out = own.copy()
+        for i, near in enumerate(self._faces.query_ball_point(points, self.radius)):
+            near = np.asarray(near, dtype=np.int64)
+            near = near[normals[near] @ own[i] > 0]
+            if near.size:
+                mean = areas[near] @ normals[near]
+                out[i] = mean / np.linalg.norm(mean)
+        return out
 
     def link(self, a: np.ndarray, b: np.ndarray, spacing: float) -> np.ndarray | None:
         """Interior points of an in-contact link a -> b on the stain, or None.
@@ -482,6 +499,8 @@ def _pass_path(part_world, faces, pass_number, patch_ids, params, reachable, pla
         # One spline per curve and per link, joined end to end: a single spline through
         # a boustrophedon turn would overshoot the corner off the stain.
         seg = np.vstack([s if i == 0 else s[1:] for i, s in enumerate(map(_fit_spline, piece))])
+        if len(seg) < 2:  # coincident waypoints: nothing to scrub
+            continue
         segments.append(seg)
         normals.append(surface.stain_normals(seg))
     if segments and previous_end is not None:

@@ -107,6 +107,36 @@ def cartesian_impedance_torques(model, data, q, dq, frame_id, world_T_target, *,
     return impedance_step(model, data, q, dq, int(frame_id), target, K, D, ff)
 
 
+def cartesian_damping(model, data, q, J, k: float, k_r: float, zeta: float) -> np.ndarray:
+    """(6, 6) damping of the Cartesian impedance by the factorization design (Albu-Schaeffer et
+    al., ICRA 2003; the damping ratio of KUKA's Cartesian impedance mode): ``D = zeta (A K1 + K1 A)``
+    with ``A^2 = Lambda(q)``, the arm's Cartesian inertia at the pad, and ``K1^2 = diag(k I3, k_r I3)``.
+    Each axis gets damping ratio zeta for the inertia it really has (the wrist's light rotations
+    and the arm's heavy ones alike), where one scalar mass under- or over-damps some of them.
+
+    Parameters
+    ----------
+    model, data : pinocchio Model and a Data of it (scratch: its mass matrix is overwritten)
+    q : (nq,) float, rad
+    J : (6, nq) float
+        Frame Jacobian at ``q``, LOCAL_WORLD_ALIGNED (the twist the damping acts on).
+    k, k_r : float
+        Translational (N/m) and rotational (N m/rad) stiffness.
+    zeta : float
+        Damping ratio.
+
+    Returns
+    -------
+    (6, 6) float: N s/m, N s, N m s/rad blocks, acting on the twist ``J dq``.
+    """
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    w, V = np.linalg.eigh(J @ np.linalg.solve(M, J.T))
+    A = (V / np.sqrt(np.maximum(w, 1e-9))) @ V.T
+    K1 = np.sqrt(np.array([k] * 3 + [k_r] * 3))
+    return zeta * (A * K1 + K1[:, None] * A)
+
+
 def impedance_step(model, data, q, dq, frame_id: int, world_T_target, K, D, wrench_ff=None) -> np.ndarray:
     """:func:`cartesian_impedance_torques` without input checks, for control loops (only
     ``data.oMf[frame_id]`` is updated among the frame placements)."""
