@@ -117,11 +117,8 @@ def test_impedance_step_places_the_frame_itself(robot):
 
 
 def test_cartesian_damping_gives_each_axis_its_ratio_for_the_arm_inertia_it_has():
-    import pinocchio as pin
-
     from mavac.params import BimanualCellParams, ToolpathParams
     from mavac.scrubbing.cell import cell_robots
-    from mavac.sim.control import cartesian_damping
 
     cleaner, _ = cell_robots(BimanualCellParams(), ToolpathParams())
     robot = cleaner.model
@@ -130,7 +127,7 @@ def test_cartesian_damping_gives_each_axis_its_ratio_for_the_arm_inertia_it_has(
     J = pin.computeFrameJacobian(robot, data, q, robot.getFrameId(cleaner.tool_frame), pin.LOCAL_WORLD_ALIGNED)
     Lambda = np.linalg.inv(J @ pin.computeMinverse(robot, robot.createData(), q) @ J.T)
     k, zeta = 5000.0, 0.7
-    D = cartesian_damping(robot, robot.createData(), q, J, k, k, zeta)
+    D = C.cartesian_damping(robot, robot.createData(), q, J, k, k, zeta)
     # one stiffness on every axis: D = 2 zeta sqrt(k Lambda), so D^2 = 4 zeta^2 k Lambda
     assert np.allclose(D, D.T) and np.allclose(D @ D, 4 * zeta**2 * k * Lambda, rtol=1e-6, atol=1e-6)
     # the iiwa's Cartesian inertia spans more than 10x: one scalar mass cannot damp every axis

@@ -398,7 +398,7 @@ def test_a_coupon_stroke_that_does_not_hold_contact_is_a_failed_experiment():
     assert not coupon.held_contact(off) and not coupon.held_contact(dict(row, force_error_all=-0.2))
 
 
-def test_the_damping_acts_on_the_error_to_the_schedules_own_motion():
+def test_schedule_twists_are_the_nominal_frames_own_motion():
     from scipy.spatial.transform import Rotation
 
     from mavac.scrubbing.scrub import schedule_twists
