@@ -114,18 +114,11 @@ def test_cell_params_name_the_field():
         assert BimanualCellParams().world_T_holder[0, 3] == pytest.approx(1.2)
 
 
-def test_held_setups_build_the_part_checkers_once_and_agree_with_a_fresh_build(arms, monkeypatch):
+def test_held_setups_build_the_part_checkers_once_and_agree_with_a_fresh_build(arms, count_checker_builds):
     cleaner, holder = arms
     cell = BimanualCellParams()
     part = load_part("bowl")
-    built = []
-
-    class Counting(C.CollisionChecker):
-        def __init__(self, *args, **kwargs):
-            built.append(1)
-            super().__init__(*args, **kwargs)
-
-    monkeypatch.setattr(C, "CollisionChecker", Counting)
+    built = count_checker_builds(C)
     held = HeldSetups(cleaner, holder, part.mesh, cell)
     setups = np.array([[0.1, 0.1, 0.0], [0.0, -0.1, 1.0], [-0.1, 0.05, 2.5]])
     first = held(setups)

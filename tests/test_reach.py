@@ -159,7 +159,7 @@ def test_collision_option_only_removes_patches():
         R.patch_reach(robot(), targets, setups, SPACE, params=ReachParams(check_collision=True))
 
 
-def test_part_reach_builds_its_collision_checker_once_and_answers_as_a_fresh_one(monkeypatch):
+def test_part_reach_builds_its_collision_checker_once_and_answers_as_a_fresh_one(count_checker_builds):
     # issue 33: a checker (a coal hierarchy of the whole part) per reach call cost 60 s and 1 GB
     # of garbage per planning run on a 2 M-face part
     import pickle
@@ -171,14 +171,7 @@ def test_part_reach_builds_its_collision_checker_once_and_answers_as_a_fresh_one
     params = ReachParams(check_collision=True)
     setups = np.array([[0.0, 0.25, 0.0], [0.25, 0.0, 1.571], [0.25, 0.5, 0.0]])
     fresh = [R.patch_reach(robot(), targets, s[None], SPACE, params=params, part_mesh=box) for s in setups]
-    built = []
-
-    class Counting(R.CollisionChecker):
-        def __init__(self, *args, **kwargs):
-            built.append(1)
-            super().__init__(*args, **kwargs)
-
-    monkeypatch.setattr(R, "CollisionChecker", Counting)
+    built = count_checker_builds(R)
     live = R.PartReach(robot(), targets, SPACE, params=params, part_mesh=box)
     answers = [live(s[None]) for s in setups]
     assert len(built) == 1
