@@ -223,7 +223,8 @@ def test_force_integral_only_while_the_pad_is_on_the_part():
     sched = Schedule(np.tile(T.translation, (n, 1)), np.repeat(T.rotation[None], n, 0),
                      np.tile([0.0, 0.0, 10.0], (n, 1)), np.ones(n, bool))
     g = Gains.of(CELL, 5000.0)
-    state = {"integral": 0.0, "touch": False, "saturated": False, "twists": schedule_twists(sched, 0.002)}
+    state = {"integral": 0.0, "touch": False, "saturated": False, "twists": schedule_twists(sched, 0.002),
+             "mass_data": robot.createData()}
     for i in range(n):  # off the part, 0 N measured: nothing may wind up
         _scrub_torques(robot, q, dq, J, T, sched, i, g, state, 0.0, 0.002)
         assert state["integral"] == 0.0 and not state["saturated"]
@@ -389,13 +390,14 @@ def test_a_coupon_stroke_that_does_not_hold_contact_is_a_failed_experiment():
         held = coupon(x)
         row = coupon.stroke_row(x)
         assert held > 0.1 and coupon.held_contact(row) and row["duty"] >= CELL.tracking_duty
+        # the same stroke, off the pad for 10 % of it or 20 % short of f_n, would have failed
+        assert not coupon.held_contact(dict(row, duty=0.9))
+        assert not coupon.held_contact(dict(row, force_error_all=-0.2))
     strict = dataclasses.replace(CELL, tracking_force_error=1e-9)  # no stroke tracks f_n this well
     with CouponCell(strict) as coupon:
         assert coupon(x) == 0.0 and not coupon.held_contact(coupon.stroke_row(x))
         with pytest.raises(ValueError, match="x: no stroke was run"):
             coupon.stroke_row(x + 1.0)
-    off = dict(row, duty=0.9)
-    assert not coupon.held_contact(off) and not coupon.held_contact(dict(row, force_error_all=-0.2))
 
 
 def test_schedule_twists_are_the_nominal_frames_own_motion():

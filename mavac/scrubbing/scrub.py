@@ -227,7 +227,7 @@ def run_schedule(cell: TwoArmCell, schedule: Schedule, *, stiffness: float) -> S
     c.enable_torque_control()
     m = len(schedule.positions)
     log = _StepLog(m)
-    state = {"integral": 0.0, "sliding": 0.0, "touch": False, "saturated": False}
+    state = {"integral": 0.0, "sliding": 0.0, "touch": False, "saturated": False, "mass_data": robot.createData()}
     kept, contacts = [], []
     state["twists"] = schedule_twists(schedule, dt)
     for i in range(m):
@@ -355,7 +355,7 @@ def _scrub_torques(robot, q, dq, J, T, schedule, i, g, state, f_measured, dt) ->
     fz = f_cmd[2] + state["integral"] if schedule.contact[i] else g.k * e_t[2]
     F_t = np.array([g.k * e_t[0] + f_cmd[0], g.k * e_t[1] + f_cmd[1], fz])
     wrench = np.concatenate([R @ F_t, g.kr * pin.log3(R @ T.rotation.T)])
-    D = cartesian_damping(robot, state.setdefault("mass_data", robot.createData()), q, J, g.k, g.kr, g.zeta)
+    D = cartesian_damping(robot, state["mass_data"], q, J, g.k, g.kr, g.zeta)
     wrench -= D @ (v - state["twists"][i])  # damping of the error to the schedule's own motion
     # spin about the pad axis is free (a round pad)
     wrench[3:] -= R[:, 2] * (R[:, 2] @ wrench[3:])
