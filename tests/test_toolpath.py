@@ -278,14 +278,7 @@ def test_the_pad_axis_is_the_plane_it_rests_on_not_one_face_normal():
     from mavac.scrubbing.toolpath import _Surface
 
     # a roof: two 20-degree slopes meeting at a ridge along y, in 2 mm triangles
-    x = np.linspace(-0.1, 0.1, 101)
-    y = np.linspace(-0.05, 0.05, 51)
-    X, Y = np.meshgrid(x, y, indexing="ij")
-    Z = -np.abs(X) * np.tan(np.radians(20))
-    idx = np.arange(X.size).reshape(X.shape)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
-    roof = trimesh.Trimesh(np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]),
-                           np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])]), process=False)
+    roof = height_field(size=0.2, n=100, z=lambda X, Y: -np.abs(X) * np.tan(np.radians(20)))
     surface = _Surface(roof, roof, 0.03)
     ridge, slope = np.array([[0.0, 0.0, 0.0], [0.05, 0.0, -0.05 * np.tan(np.radians(20))]])
     n_ridge, n_slope = surface.stain_normals(np.array([ridge, slope]))
