@@ -530,11 +530,24 @@ def kabir_table7() -> Part:
                   "avg. setup time (s), paper", "ours", "planning time (s), paper", "ours"], rows)
     body += ("\n\n**SIMULATED**: two LBR iiwa arms in pybullet. Our setup time is the simulated motion of the "
              "holding arm (the paper's bowl setups were changed by a person); our planning time is wall time "
-             "on a shared 2-core machine. The cell's placement and its setup square are ours. "
+             "on a shared 2-core machine. The cell's placement is ours; " + _cell_square()
              + _source("kabir_table7.csv"))
     return Part(body,
                 "setups bowl / hull " + _slash(_lookup(paper, "solution_size", part=p) for p in ("bowl", "hull")),
                 _slash(_lookup(ours, "solution_size_ours", part=p) for p in ("bowl", "hull")))
+
+
+def _cell_square() -> str:
+    """Where the narrowing put the cell's setup square (optional: kabir_cell_square.csv)."""
+    try:
+        sq = _read("kabir_cell_square.csv", ("part", "x_lo", "x_hi", "y_lo", "y_hi", "reaching", "reaching_in_square"))
+    except NotRun:
+        return "its setup square is ours. "
+    r = sq.iloc[0]
+    kept = ", ".join(f"{x.part} {x.reaching_in_square} of {x.reaching}" for x in sq.itertuples())
+    return (f"its setup square, x {r.x_lo:g} to {r.x_hi:g} m and y {r.y_lo:g} to {r.y_hi:g} m from the cleaning "
+            "arm's base, comes from the paper's narrowing (Sec. IV-A) run with both arms, keeping the most "
+            f"presentable setups that reach a patch ({kept}; `data/results/kabir_cell_square.csv`). ")
 
 
 def _gpr_acceptance() -> str:
@@ -597,8 +610,25 @@ def kabir_execution() -> Part:
              "part; the force errors are relative to f_n, over all commanded steps (0 N while off the part) "
              "and over contact steps only. While a setup is scrubbed the part collides as its exact mesh; "
              "wear goes only to faces within 2 mm of the surface under the pad. "
-             + _source("kabir_execution.csv", paper=False))
+             + _source("kabir_execution.csv", paper=False) + _preston())
     return Part(body)
+
+
+def _preston() -> str:
+    """C_p's sensitivity to the Preston constant on the coupon (optional: kabir_preston.csv)."""
+    cols = ("part", "parameters", "Cp_th", "preston_for_Cp_th", "C_p_x0.5", "C_p_x1", "C_p_x2")
+    try:
+        df = _read("kabir_preston.csv", cols)
+    except NotRun:
+        return ""
+    rows = [[r["part"], r["parameters"], r["Cp_th"], f"{r['preston_for_Cp_th']:.3g}", f"{r['C_p_x0.5']:.2f}",
+             f"{r['C_p_x1']:.2f}", f"{r['C_p_x2']:.2f}"] for _, r in df.iterrows()]
+    return ("\n\nOne Preston constant (`mavac.params.PRESTON`) serves the cell and the analytic model, calibrated once "
+            "on the cell's coupon: the least at which both parts' paper operating points meet their paper "
+            "thresholds. C_p of one coupon stroke (SIMULATED) at half, once and twice it, and the constant each "
+            "point's threshold alone would give:\n\n"
+            + _table(["part", "parameters", "C_p^th (paper)", "constant for C_p^th", "C_p at ×0.5", "×1", "×2"], rows)
+            + "\n\n" + _source("kabir_preston.csv"))
 
 
 # ---------------------------------------------------------------- beyond the papers (notebook 12)

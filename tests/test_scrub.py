@@ -412,3 +412,28 @@ def test_schedule_twists_are_the_nominal_frames_own_motion():
     sched = Schedule(np.column_stack([0.1 * t, np.zeros(m), np.zeros(m)]), R, np.zeros((m, 3)), np.ones(m, bool))
     twists = schedule_twists(sched, dt)
     assert twists == pytest.approx(np.tile([0.1, 0.0, 0.0, 0.0, 0.0, 0.5], (m, 1)))
+
+
+def test_a_bowl_stained_inside_is_scrubbed_where_the_pad_reaches():
+    """A user's bowl standing upright with a stain on its concave inside: the pad meets the
+    exact inner surface (not the held copy's convex hull over the rim) and removes most of it,
+    with no link but the pad touching the part."""
+    import trimesh
+
+    from mavac.geometry.parts import load_part
+    from mavac.geometry.stain_marking import mark_stain
+    from mavac.scrubbing.run import paper_lissajous, run_part
+
+    mesh = load_part("bowl").mesh.copy()  # the paper's bowl stands upside down: turn it upright
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(np.pi, [1.0, 0.0, 0.0]))
+    mesh.invert()  # its one sheet now faces into the bowl
+    mesh.apply_translation((0.0, 0.0, -mesh.bounds[0, 2]))
+    c, n = mesh.triangles_center, mesh.face_normals
+    r = np.hypot(c[:, 0], c[:, 1])
+    inside = np.flatnonzero((n[:, 2] > 0.3) & (r > 0.03) & (r < 0.05) & (c[:, 0] > 0.0) & (np.abs(c[:, 1]) < 0.02))
+    assert len(inside) > 50 and c[inside, 2].max() < mesh.bounds[1, 2] - 0.03  # well below the rim
+    run = run_part(mark_stain(mesh, faces=inside, passes=1, name="bowl inside"), fast=True,
+                   lissajous=paper_lissajous("bowl"), snapshots=False)
+    rows = run.execution.rows
+    assert rows and all(row["nonpad_part_steps"] == 0 and row["arm_arm_steps"] == 0 for row in rows)
+    assert run.stain_removed > 0.5

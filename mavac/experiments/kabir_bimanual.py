@@ -3,22 +3,26 @@ the tables and figures.
 
 The cell and its loop live in :mod:`mavac.scrubbing` (:func:`mavac.scrubbing.run.run_part`,
 :class:`mavac.scrubbing.coupon.CouponCell`). Here: :func:`learn_on_coupon` runs the GPR
-learner (Sec. VIII) with the paper's thresholds on the coupon; the rest tabulates
+learner (Sec. VIII) with the paper's thresholds on the coupon; :func:`cell_for_parts` places
+the cell's setup square by the paper's narrowing; the rest tabulates
 (Table VII, ``kabir_execution.csv``) and draws (Figs. 10-13) what
 :func:`mavac.scrubbing.run.run_part` returned.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
 from ..paper import paper_scalar
-from ..params import GPRParams
-from ..scrubbing.coupon import CouponCell
+from ..params import BimanualCellParams, GPRParams, ToolpathParams
+from ..scrubbing.cell_space import narrowed_cell_space
+from ..scrubbing.coupon import CouponCell, calibrated_preston
 from ..scrubbing.gpr import learn_parameters
 from ..scrubbing.lissajous import vector_excursions
-from ..scrubbing.run import OPERATION, PartRun, paper_operation
+from ..scrubbing.run import OPERATION, PartRun, paper_operation, part_for_run
 from ..scrubbing.wear import lissajous_from_vector
 from ..seeding import rng_for
 
@@ -28,6 +32,15 @@ PARTS = ("bowl", "hull")
 def paper_thresholds(part: str) -> tuple[float, float]:
     """Kabir Sec. IX-C: the learner's ``(C_p^th, P_th)`` for ``part``, from ``data/paper_values.csv``."""
     return tuple(paper_scalar("kabir", "Sec. IX-C GPR", q, f"part={part}") for q in ("Cp_th", "P_th"))
+
+
+def cell_for_parts(cell: BimanualCellParams, toolpath: ToolpathParams, *, fast: bool, seed: int = 0):
+    """``cell`` with its setup square placed by the paper's narrowing (Sec. IV-A) over the stains
+    of :data:`PARTS` as :func:`mavac.scrubbing.run.run_part` scrubs them
+    (:func:`mavac.scrubbing.cell_space.narrowed_cell_space`), and the narrowing's table."""
+    parts = {p: part_for_run(p, fast=fast, seed=seed) for p in PARTS}
+    space, info = narrowed_cell_space(parts, cell, toolpath)
+    return replace(cell, space=space), info
 
 
 # ---------------------------------------------------------------- the GPR learner on a coupon
@@ -54,6 +67,32 @@ def learn_on_coupon(part: str, experiment: CouponCell, *, budget: int, seed: int
                               admissible=lambda X: vector_excursions(X) <= cap)
     x = paper_operation(part) if not result.feasible else [result.chosen[k] for k in OPERATION]
     return result, lissajous_from_vector(np.asarray(x, float)[None])
+
+
+def preston_table(coupon: CouponCell, points: dict, *, factors=(0.5, 1.0, 2.0)) -> pd.DataFrame:
+    """C_p of one coupon stroke at each operation point for the cell's Preston constant times
+    ``factors`` (its sensitivity), and the constant each part's paper threshold would calibrate
+    on this coupon (:func:`mavac.scrubbing.coupon.calibrated_preston`).
+
+    Parameters
+    ----------
+    coupon : CouponCell
+        Open.
+    points : dict (part, parameters) -> (5,) float
+        Operation vectors, e.g. ``("bowl", "paper") -> paper_operation("bowl")``.
+    factors : sequence of float
+        Multiples of ``coupon.params.preston``.
+    """
+    rows = []
+    for (part, source), x in points.items():
+        cp_th = paper_thresholds(part)[0]
+        coupon(x)  # the stroke, run once
+        held = coupon.held_contact(coupon.stroke_row(x))  # else C_p is 0 whatever the constant
+        row = dict(part=part, parameters=source, held_contact=held, Cp_th=cp_th,
+                   preston_for_Cp_th=calibrated_preston(coupon, x, cp_th) if held else float("nan"))
+        row.update({f"C_p_x{f:g}": coupon.c_p_at(x, f * coupon.params.preston) for f in factors})
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
 # ---------------------------------------------------------------- tables

@@ -16,7 +16,7 @@ from ..params import BimanualCellParams, ToolpathParams
 from ..seeding import check_seed, rng_for
 from ..setups.reach import base_T_part
 from ..sim.world import SimWorld
-from ..validate import check_instance
+from ..validate import check_instance, check_int, check_positive, check_range
 from .cell import cell_robots, holder_ik
 from .residue import StainState, perceive
 from .scene import fix_part, open_cell, world_T_part
@@ -85,7 +85,7 @@ class CouponCell:
         self.part = coupon_part(seed)
         self.cleaner, self.holder = cell_robots(cell, toolpath)
         self.world = None
-        self._memo = {}
+        self._unit = {}
         self.strokes = {}
 
     def __enter__(self):
@@ -114,12 +114,23 @@ class CouponCell:
     def __call__(self, x, rng: np.random.Generator | None = None) -> float:
         """C_p of one stroke at ``x``. Its process and pixel noise come from the seed and ``x``
         (not from ``rng``), so learners with other thresholds share the runs at the same point."""
+        return self.c_p_at(x, self.params.preston)
+
+    def c_p_at(self, x, preston: float) -> float:
+        """C_p of the stroke at ``x`` had the Preston constant been ``preston`` (stain layers
+        per Pa per m): the simulated stroke is run once per ``x`` and its measured contact
+        reused (removal is linear in the constant), the process and pixel noise are the same."""
         key = _key(x)
-        if key not in self._memo:
-            words = np.frombuffer(np.asarray(key).tobytes(), np.uint32).tolist()
-            rng = rng_for(self.seed, "coupon stroke", *words)
-            self._memo[key], self.strokes[key] = self._stroke(np.asarray(key), rng)
-        return self._memo[key]
+        if key not in self._unit:
+            self._unit[key], self.strokes[key] = self._stroke(np.asarray(key))
+        if not self.held_contact(self.strokes[key]):
+            return 0.0
+        words = np.frombuffer(np.asarray(key).tobytes(), np.uint32).tolist()
+        rng = rng_for(self.seed, "coupon stroke", *words)
+        state = StainState.from_part(self.part, rng_for(self.seed, "coupon hardness"), image_size=COUPON_IMAGE)
+        before = state.thickness.copy()
+        state.scrub(check_positive("preston", preston) * self._unit[key], rng)
+        return float(perceive(state, before, self.part.stain_faces, rng)["C_p"])
 
     def stroke_row(self, x) -> dict:
         """Contact measures (:meth:`mavac.scrubbing.scrub.ScrubLog.row`) of the stroke run at
@@ -135,9 +146,9 @@ class CouponCell:
         cell = self.params
         return row["duty"] >= cell.tracking_duty and abs(row["force_error_all"]) <= cell.tracking_force_error
 
-    def _stroke(self, x, rng: np.random.Generator) -> tuple[float, dict]:
+    def _stroke(self, x) -> tuple[np.ndarray, dict]:
+        """Run the stroke at ``x``: per-face removal at a unit Preston constant, contact measures."""
         lis = lissajous_from_vector(np.asarray(x, float)[None])
-        state = StainState.from_part(self.part, rng_for(self.seed, "coupon hardness"), image_size=COUPON_IMAGE)
         sched = schedule_for_pass(self.stroke, lis, self.toolpath, self.world.time_step,
                                   ramp_periods=self.params.lissajous_ramp_periods)
         cleaner, brake_torque = self.cell.cleaner, self.params.brake_torque
@@ -147,16 +158,52 @@ class CouponCell:
         cleaner.reset_q(self.q_start)
         cleaner.brake(self.q_start, brake_torque)
         log = run_schedule(self.cell, sched, stiffness=lis.kappa_x)
-        before = state.thickness.copy()
-        state.scrub(log.removal, rng)
         cleaner.reset_q(self.q_start)
         cleaner.brake(self.q_start, brake_torque)
         self.world.step(RESET_STEPS)
-        row = log.row()
-        c_p = float(perceive(state, before, self.part.stain_faces, rng)["C_p"])
-        return (c_p if self.held_contact(row) else 0.0), row
+        return log.removal / self.params.preston, log.row()
 
 
 def _key(x) -> tuple:
     """Memo key of an operation vector (5,): its values rounded to 1e-9."""
     return tuple(np.round(np.asarray(x, float), 9).tolist())
+
+
+def calibrated_preston(coupon: CouponCell, x, c_p_target: float, *, bounds=(1e-7, 1e-1), steps: int = 40) -> float:
+    """The least Preston constant (stain layers per Pa per m) at which one coupon stroke at
+    operation vector ``x`` reaches ``C_p >= c_p_target``: bisection in log over ``bounds``
+    (C_p grows with the constant; the stroke itself is simulated once).
+
+    Parameters
+    ----------
+    coupon : CouponCell
+        Open (inside its ``with`` block).
+    x : (5,) float
+        Operation vector ``(v, f_n [N], kappa [N/m], f_x [Hz], A_x [N])``.
+    c_p_target : float in (0, 1)
+    bounds : (float, float)
+        Search range of the constant, low < high, both > 0.
+    steps : int, >= 1
+        Bisection steps (40 halve the log range to 1e-12 of itself).
+
+    Raises
+    ------
+    ValueError
+        When the stroke at ``x`` did not hold contact (its C_p is 0 whatever the constant), or
+        when even ``bounds[1]`` does not reach the target.
+    """
+    check_range("c_p_target", c_p_target, 0.0, 1.0, lo_open=True, hi_open=True)
+    lo, hi = (check_positive(f"bounds[{k}]", float(b)) for k, b in enumerate(bounds))
+    if not lo < hi:
+        raise ValueError(f"bounds must be (low, high) with low < high, got {bounds}")
+    steps = check_int("steps", steps, 1)
+    if coupon.c_p_at(x, hi) < c_p_target:
+        row = coupon.stroke_row(x)
+        why = "the stroke did not hold contact" if not coupon.held_contact(row) else f"C_p stays below it at {hi:g}"
+        raise ValueError(f"c_p_target: no Preston constant in {bounds} reaches C_p = {c_p_target} at x = "
+                         f"{np.round(np.asarray(x, float), 4).tolist()} ({why})")
+    a, b = np.log(lo), np.log(hi)
+    for _ in range(steps):
+        mid = 0.5 * (a + b)
+        a, b = (a, mid) if coupon.c_p_at(x, float(np.exp(mid))) >= c_p_target else (mid, b)
+    return float(np.exp(b))
