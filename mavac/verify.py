@@ -77,7 +77,8 @@ OUTPUTS: dict[str, tuple[str, ...]] = {
     "09": ("results/kabir_toolpaths.csv", "results/kabir_toolpath_passes.csv", "results/kabir_icp.csv",
            "results/kabir_icp_trials.csv"),
     "10": ("results/kabir_gpr.csv", "results/kabir_gpr_speedup.csv"),
-    "11": ("results/kabir_table7.csv", "results/kabir_execution.csv"),
+    "11": ("results/kabir_cell_square.csv", "results/kabir_preston.csv", "results/kabir_table7.csv",
+           "results/kabir_execution.csv"),
     "12": ("results/beyond_iess_optimality.csv", "results/beyond_iess_by_estimate.csv",
            "results/beyond_visibility_offline.csv"),
 }

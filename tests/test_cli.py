@@ -649,6 +649,39 @@ def test_scrub_refuses_a_part_too_large_for_the_cell(tmp_path, capsys):
     assert "Traceback" not in err and not (tmp_path / "out").exists()
 
 
+def test_scrub_narrow_presents_the_part_in_the_square_the_narrowing_places(files, tmp_path, capsys, monkeypatch):
+    import mavac.scrubbing.cell_space as cell_space
+
+    squares = []
+
+    def spy(*args, **kwargs):
+        squares.append(real(*args, **kwargs)[0])
+        return squares[-1], None
+
+    real = cell_space.narrowed_cell_space
+    monkeypatch.setattr(cell_space, "narrowed_cell_space", spy)
+    code, _, err = run(["scrub", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--fast", "--quiet",
+                        "--narrow", "--out", str(tmp_path / "n.json")], capsys)
+    assert code == 0, err
+    (space,) = squares
+    doc = _strict_json(tmp_path / "n.json")
+    assert doc["setups"]
+    for setup in doc["setups"]:
+        x, y = np.array(setup["base_T_part"])[:2, 3]  # as the part was met: the holding arm sags a little
+        assert space.origin_x - 0.01 <= x <= space.origin_x + space.x_max + 0.01
+        assert space.origin_y - 0.01 <= y <= space.origin_y + space.y_max + 0.01
+
+
+def test_scrub_narrow_that_finds_no_square_says_so_and_writes_nothing(files, tmp_path, capsys, monkeypatch):
+    import mavac.scrubbing.cell_space as cell_space
+
+    monkeypatch.setattr(cell_space.HeldSetups, "__call__", lambda self, setups: np.zeros(len(setups), dtype=bool))
+    code, _, err = run(["scrub", str(files / "dome.ply"), "--units", "mm", "--stain", "up:60", "--fast", "--quiet",
+                        "--narrow", "--out", str(tmp_path / "n.json")], capsys)
+    assert code == 1 and "mavac scrub: error: --narrow: no placement of the part lets the holding arm" in err, err
+    assert "Traceback" not in err and not list(tmp_path.iterdir())
+
+
 def test_scrub_interrupted_exits_130_and_leaves_no_file(files, tmp_path, capsys, monkeypatch):
     import mavac.scrubbing.run as run_module
 
