@@ -35,7 +35,7 @@ def test_setups_reaching_a_patch_is_the_full_reach_tests_any():
     assert np.array_equal(S.setups_reaching_a_patch(cleaner, part, setups, wide, params, chunk=7), brute)
 
 
-def test_the_square_keeps_the_most_setups_the_two_arms_share():
+def test_the_square_keeps_the_cells_size_and_holds_setups_that_present_and_reach_the_part():
     parts = {"coupon": coupon_part()}
     space, info = S.narrowed_cell_space(parts, CELL, ToolpathParams(), wide_resolution=COARSE)
     row = info.iloc[0]
