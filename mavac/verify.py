@@ -80,7 +80,8 @@ OUTPUTS: dict[str, tuple[str, ...]] = {
     "11": ("results/kabir_cell_square.csv", "results/kabir_preston.csv", "results/kabir_table7.csv",
            "results/kabir_execution.csv"),
     "12": ("results/beyond_iess_optimality.csv", "results/beyond_iess_by_estimate.csv",
-           "results/beyond_visibility_offline.csv"),
+           "results/beyond_visibility_offline.csv", "results/beyond_adaptive_vs_systematic_runs.csv",
+           "results/beyond_adaptive_vs_systematic.csv"),
 }
 
 #: The runner's records of a run (not written by a notebook).

@@ -27,3 +27,22 @@ def test_recorder_keeps_one_clock_over_arm_base_and_vacuum():
     assert r.qs[2].tolist() == [0.2, 0.4] and r.qs[-1].tolist() == [0.3, 0.4]
     np.testing.assert_allclose(r.cleaned_at, [8.75, np.nan, 8.25, np.nan])
     assert r.qs.shape == (7, 2) and r.bases.shape == (7, 3)
+
+
+def test_motion_totals_measure_an_arc_of_the_shoulder_pan_and_ignore_base_drives():
+    from mavac.cleaning.replay import motion_totals
+    from mavac.robots.kinematics import fk
+    from mavac.robots.models import ur10_mobile
+
+    robot = ur10_mobile()
+    q0 = np.array(robot.q_home, dtype=float)
+    q1 = q0.copy()
+    q1[0] += 1.0  # joint 1 turns about the base's vertical axis: the tool draws an arc
+    rec = ReplayRecorder([0.0, 0.0, 0.0], q0, n_heaps=0)
+    rec.arm_path([q0, q1], 2.0)
+    rec.base_drive([3.0, 1.0, 0.5], 4.0)  # the arm is still: nothing to count
+    tool_m, joints_rad = motion_totals(rec.replay(), robot)
+    radius = np.linalg.norm(fk(robot, q0)[:2, 3])  # the base's z axis is joint 1's
+    assert joints_rad == pytest.approx(1.0)
+    assert tool_m == pytest.approx(radius * 1.0, rel=1e-5)
+    assert motion_totals(ReplayRecorder([0, 0, 0], q0, 0).replay(), robot) == (0.0, 0.0)

@@ -21,16 +21,30 @@ import numpy as np
 
 from ..geometry.machines import Machine, dust_heaps
 from ..params import DustParams
+from ..seeding import rng_for
 from ..validate import check_instance, check_int, check_points
 
 
 def heaps_for_trial(machine: Machine, dust: DustParams, seed: int) -> np.ndarray:
     """(n, 3) heap positions (m) on ``machine`` for the trial with this ``seed``; (0, 3) when
-    the machine has no upward-facing surface."""
+    the machine has no upward-facing surface.
+
+    With ``dust.density`` below 1, the trial keeps ``round(density * n)`` heaps of the full
+    layout, drawn without replacement with the seed (stage ``"dust density"``), in their order:
+    a sparser trial's heaps are a subset of the full trial's with the same seed."""
     check_instance("machine", machine, Machine)
     check_instance("dust", dust, DustParams)
     seed = check_int("seed", seed, 0, 2**31 - 1)
-    return dust_heaps(machine, spacing=dust.spacing, seed=seed)
+    heaps = dust_heaps(machine, spacing=dust.spacing, seed=seed)
+    return heaps[density_subset(len(heaps), dust.density, seed)]
+
+
+def density_subset(n: int, density: float, seed: int) -> np.ndarray:
+    """(round(density * n),) int, increasing: which of a full layout's ``n`` heaps a trial with
+    ``density`` and ``seed`` keeps (all of them at density 1)."""
+    if density == 1.0:
+        return np.arange(n)
+    return np.sort(rng_for(seed, "dust density").choice(n, size=round(density * n), replace=False))
 
 
 #: Ours: metres a tool centre keeps from the suction radius before :meth:`DustField.suck` skips

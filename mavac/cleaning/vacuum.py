@@ -159,6 +159,20 @@ def linear_move(cell, world_T_from, world_T_to, params: VacuumParams, log: Vacuu
     return _follow(cell, world_T_to, waypoints, int(np.ceil(params.max_settle_time / dt)), params, log)
 
 
+def path_move(cell, world_T_ref, points, params: VacuumParams, log: VacuumLog) -> float:
+    """Impedance-track the tool centre along the polyline ``points`` (k, 3), m, from its first
+    point, at ``params.speed`` with the orientation of ``world_T_ref``, then settle; sucks heaps
+    on the way (the systematic baseline's raster lines). Returns the closest approach to the
+    last point, m."""
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
+    n = max(1, int(np.ceil(s[-1] / params.speed / cell.world.time_step)))
+    t = np.arange(1, n + 1) * (s[-1] / n)
+    waypoints = np.column_stack([np.interp(t, s, P[:, i]) for i in range(3)])
+    return _follow(cell, world_T_ref, waypoints, int(np.ceil(params.max_settle_time / cell.world.time_step)), params,
+                   log)
+
+
 def spiral_move(cell, world_T_node, params: VacuumParams, log: VacuumLog) -> np.ndarray:
     """The authors' spiral around the node of ``world_T_node`` (:func:`spiral_path`, over
     ``params.spiral_time`` s) under impedance; returns the tool pose commanded at its end."""

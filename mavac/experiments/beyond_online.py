@@ -1,0 +1,178 @@
+"""Notebook 12, online parts: MAVAC's adaptive cleaning against a systematic baseline (issue 34).
+
+MAVAC says a comparison with systematic coverage "would be valuable" but is "challenging due to
+the lack of established baselines". The baseline here is :func:`mavac.cleaning.systematic.run_systematic`:
+from the same offline plan's spots, the tool vacuums a boustrophedon raster over every surface dust
+can rest on, under the same impedance control and suction. Both run on Table 2's two scenes (the
+test bench; the sanding and milling machines together), with the paper's reading and its HPR
+plan (notebook 05's), at several dust densities: a share of the 10 cm heap grid, drawn with each
+trial's seed (:attr:`mavac.params.DustParams.density`).
+
+Every run goes through :func:`mavac.parallel.map_trials` and takes its seed from its argument, so
+the table does not depend on scheduling and runs on a dask cluster unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..cleaning.heaps import density_subset
+from ..cleaning.replay import motion_totals
+from ..cleaning.systematic import run_systematic
+from ..cleaning.trial import run_trial
+from ..geometry.machines import load_machine
+from ..parallel import map_trials
+from ..robots.models import ur10_mobile
+from ..validate import check_sequence
+from ..viz.plots import new_figure
+from ..paper import paper_values
+from .mavac_online import PAPER_SCENES, SCENES, offline_plan, online_params, paper_scene_means
+
+#: the issue's dust densities: all of the 10 cm grid's heaps, 30 % and 10 %
+DENSITIES = (1.0, 0.3, 0.1)
+#: the two methods compared
+METHODS = ("adaptive", "systematic")
+#: per-run columns of ``beyond_adaptive_vs_systematic_runs.csv``
+RUN_COLUMNS = ["method", "scene", "density", "seed", "heaps", "cleaned", "cleaning_pct", "sim_time_s", "base_s",
+               "arm_s", "vacuum_s", "tool_path_m", "joint_travel_rad", "time_per_cleaned_heap_s"]
+#: the quantities summarised per method, scene and density
+MEASURES = ("cleaning_pct", "sim_time_s", "tool_path_m", "joint_travel_rad", "time_per_cleaned_heap_s")
+
+
+def comparison_items(*, scenes=SCENES, densities=DENSITIES, seeds=range(5), fast: bool = False) -> list[tuple]:
+    """The runs of the comparison, each ``(method, scene, densities, seed, fast)``: one adaptive
+    trial per density, one systematic run for all densities (its motion ignores the dust, so a
+    sparser layout, a subset of the full one, is scored on the full run's vacuumed heaps)."""
+    scenes, densities, seeds = (check_sequence(n, v) for n, v in
+                                (("scenes", scenes), ("densities", densities), ("seeds", seeds)))
+    for d in densities:
+        if not 0.0 < float(d) <= 1.0:
+            raise ValueError(f"densities must be in (0, 1], got {d!r}")
+    densities = tuple(float(d) for d in densities)
+    adaptive = [("adaptive", scene, (d,), int(seed), bool(fast)) for scene in scenes for d in densities for seed in seeds]
+    return adaptive + [("systematic", scene, densities, int(seed), bool(fast)) for scene in scenes for seed in seeds]
+
+
+def _row(method, scene, density, seed, n_heaps, n_cleaned, times, tool_m, joints_rad) -> dict:
+    return dict(method=method, scene=scene, density=density, seed=seed, heaps=n_heaps, cleaned=n_cleaned,
+                cleaning_pct=round(100.0 * n_cleaned / n_heaps, 3) if n_heaps else 0.0,
+                sim_time_s=round(times.sim_time_s, 3), base_s=round(times.base_s, 3), arm_s=round(times.arm_s, 3),
+                vacuum_s=round(times.vacuum_s, 3), tool_path_m=round(tool_m, 3), joint_travel_rad=round(joints_rad, 3),
+                time_per_cleaned_heap_s=round(times.sim_time_s / n_cleaned, 3) if n_cleaned else np.nan)
+
+
+def comparison_run(item: tuple) -> list[dict]:
+    """The rows of one item of :func:`comparison_items`, one per density (module level:
+    picklable for any joblib backend)."""
+    method, scene, densities, seed, fast = item
+    machine = load_machine(scene)
+    plan = offline_plan(scene, "paper", fast=fast)
+    params = online_params("paper", fast=fast)
+    if method == "adaptive":
+        params = dataclasses.replace(params, dust=dataclasses.replace(params.dust, density=densities[0]))
+        result = run_trial(machine, plan, params=params, seed=seed)
+    else:
+        result = run_systematic(machine, plan, params=params, seed=seed)
+    motion = motion_totals(result.replay, ur10_mobile()) if result.replay is not None else (0.0, 0.0)
+    rows = []
+    for d in densities:
+        kept = np.arange(result.n_heaps) if method == "adaptive" else density_subset(result.n_heaps, d, seed)
+        rows.append(_row(method, scene, d, seed, len(kept), int(np.count_nonzero(result.cleaned[kept])),
+                         result.times, *motion))
+    return rows
+
+
+def comparison_runs(items, *, n_jobs=None) -> pd.DataFrame:
+    """Every run of ``items`` (:func:`comparison_items`), one row per run and density
+    (:data:`RUN_COLUMNS`), sorted by method, scene, density (dense first) and seed."""
+    rows = [row for rows in map_trials(comparison_run, items, n_jobs=n_jobs, desc="adaptive vs systematic")
+            for row in rows]
+    runs = pd.DataFrame(rows, columns=RUN_COLUMNS)
+    rank = dict(_m=runs.method.map({m: i for i, m in enumerate(METHODS)}),
+                _s=runs.scene.map({s: i for i, s in enumerate(dict.fromkeys(runs.scene))}))
+    return (runs.assign(**rank).sort_values(["_m", "_s", "density", "seed"], ascending=[True, True, False, True],
+                                            kind="stable").drop(columns=list(rank)).reset_index(drop=True))
+
+
+def _mean_ci(values) -> tuple[float, float, float]:
+    """Mean and its 95 % Student-t interval (NaN bounds below two values or with no spread)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if not len(v):
+        return np.nan, np.nan, np.nan
+    mean = float(v.mean())
+    if len(v) < 2 or np.ptp(v) == 0.0:
+        return mean, mean if len(v) >= 2 else np.nan, mean if len(v) >= 2 else np.nan
+    low, high = stats.t.interval(0.95, len(v) - 1, loc=mean, scale=stats.sem(v))
+    return mean, float(low), float(high)
+
+
+def comparison_summary(runs: pd.DataFrame) -> pd.DataFrame:
+    """Per method, scene and density: runs, heaps, and the mean of each of :data:`MEASURES` with
+    its 95 % interval (``_low``, ``_high``) over the seeds."""
+    rows = []
+    for (method, scene, density), g in runs.groupby(["method", "scene", "density"], sort=False):
+        row = dict(method=method, scene=scene, density=density, runs=len(g), heaps=float(g.heaps.mean()))
+        for m in MEASURES:
+            row[m], row[f"{m}_low"], row[f"{m}_high"] = _mean_ci(g[m])
+        rows.append(row)
+    return pd.DataFrame(rows).round(3)
+
+
+def time_ratios(summary: pd.DataFrame) -> pd.DataFrame:
+    """Adaptive over systematic mean simulated time, per scene and density and over both scenes
+    (the sum of the scenes' mean times), with each method's cleaning percentage beside it."""
+    wide = summary.pivot_table(index=["density", "scene"], columns="method",
+                               values=["sim_time_s", "cleaning_pct"]).reset_index()
+    wide.columns = ["_".join(c).strip("_") for c in wide.columns]
+    both = wide.groupby("density", as_index=False).agg(
+        {"sim_time_s_adaptive": "sum", "sim_time_s_systematic": "sum", "cleaning_pct_adaptive": "mean",
+         "cleaning_pct_systematic": "mean"}).assign(scene="both")
+    out = pd.concat([wide, both], ignore_index=True)
+    out["time_ratio"] = out.sim_time_s_adaptive / out.sim_time_s_systematic
+    return out.sort_values(["density", "scene"], ascending=[False, True]).round(3).reset_index(drop=True)
+
+
+def plot_comparison(summary: pd.DataFrame):
+    """Simulated time (top) and heaps cleaned (bottom) against dust density, per scene, for both
+    methods, with the 95 % intervals over seeds."""
+    scenes = list(dict.fromkeys(summary.scene))
+    fig, axes = new_figure(len(scenes), 2, size=(4.2, 3.0))
+    axes = np.asarray(axes).reshape(2, len(scenes))
+    for j, scene in enumerate(scenes):
+        for method, marker in zip(METHODS, ("o", "s")):
+            g = summary[(summary.scene == scene) & (summary.method == method)].sort_values("density")
+            x = 100.0 * g.density
+            for ax, m in zip(axes[:, j], ("sim_time_s", "cleaning_pct")):
+                err = np.vstack([g[m] - g[f"{m}_low"], g[f"{m}_high"] - g[m]])
+                ax.errorbar(x, g[m], yerr=np.nan_to_num(err), marker=marker, capsize=3, label=method)
+        axes[0, j].set_title(scene.replace("_", " "))
+        axes[0, j].set_ylabel("simulated time (s)")
+        axes[1, j].set_ylabel("heaps cleaned (%)")
+        axes[1, j].set_xlabel("dust density (% of the 10 cm grid)")
+        axes[0, j].legend()
+    return fig
+
+
+def comparison_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
+    """Per scene at full density: the paper's Table 2 (cleaning percentage, mean of its trials;
+    time, mean of its timed trials, on the real robot with perception and planning) beside our
+    adaptive and systematic runs (simulated motion time only: base, arm and vacuum)."""
+    times = paper_values("mavac", "Table 2", "time")
+    scene = times["condition"].str.extract(r"machine=([^;]+)")[0].map(PAPER_SCENES)
+    paper_time_s = (60.0 * times.groupby(scene)["value"].mean()).to_dict()
+    paper_pct = paper_scene_means()
+    full = summary[summary.density == 1.0]
+    rows = []
+    for sc in dict.fromkeys(full.scene):
+        row = dict(scene=sc, paper_cleaning_pct=paper_pct.get(sc), paper_time_s=paper_time_s.get(sc))
+        for method in METHODS:
+            hit = full[(full.scene == sc) & (full.method == method)].iloc[0]
+            row[f"ours_{method}_cleaning_pct"] = hit.cleaning_pct
+            row[f"ours_{method}_sim_time_s"] = hit.sim_time_s
+        rows.append(row)
+    return pd.DataFrame(rows)
