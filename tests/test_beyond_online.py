@@ -112,3 +112,41 @@ def test_paper_beside_ours_reads_table_2_for_each_scene():
     assert row.scene == "test_bench" and row.ours_adaptive_sim_time_s == pytest.approx(100.0)
     assert row.ours_systematic_cleaning_pct == pytest.approx(50.0)
     assert 80 < row.paper_cleaning_pct < 95 and 30 * 60 < row.paper_time_s < 45 * 60  # Table 2's test bench
+
+
+@pytest.fixture(scope="module")
+def box_plans(box_scene):
+    """The box's fast plans with HPR and with ray casting, cut to three poses."""
+    machine, _ = box_scene
+    plans = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for method in ("hpr", "raycast"):
+            plan = plan_inspection(machine, params=fast_params().with_visibility(method))
+            plans[method] = dataclasses.replace(plan, pose_set=plan.pose_set.head(3))
+    return machine, plans
+
+
+def test_visibility_items_pair_each_seed_with_both_plans():
+    items = BO.visibility_items(scenes=("a",), seeds=(1, 2), fast=True)
+    assert items == [("a", "hpr", 1, True), ("a", "hpr", 2, True), ("a", "raycast", 1, True),
+                     ("a", "raycast", 2, True)]
+
+
+def test_false_visible_heaps_are_counted_but_unseen_and_none_on_a_ray_cast_plan(box_plans, monkeypatch):
+    machine, plans = box_plans
+    monkeypatch.setattr(BO, "load_machine", lambda scene: machine)
+    monkeypatch.setattr(BO, "offline_plan", lambda scene, reading, *, offline, fast: plans[offline])
+    monkeypatch.setattr(BO, "online_params", lambda reading, *, fast: OnlineParams(dust=DustParams(spacing=0.1)))
+    runs = BO.visibility_runs(BO.visibility_items(scenes=("box",), seeds=(3,), fast=True))
+    assert list(runs.columns) == BO.VISIBILITY_COLUMNS and len(runs) == 2
+    for row in runs.itertuples():
+        assert 0 <= row.false_visible_undetected <= row.heaps_false_visible <= row.heaps_counted <= row.heaps
+        assert row.false_visible_cleaned <= row.heaps_false_visible and row.guards > 0
+    ray = runs[runs.offline == "raycast"].iloc[0]
+    assert ray.C_raycast == pytest.approx(ray.C) and ray.heaps_false_visible == 0
+    hpr = runs[runs.offline == "hpr"].iloc[0]
+    on = BO.heaps_on_elements(plans["hpr"], plans["hpr"].points[:5], BO.VisibilityScene(machine.mesh))
+    assert on["C"] == pytest.approx(hpr.C, abs=1e-4) and on["counted"].tolist() == plans["hpr"].observed[:5].tolist()
+    s = BO.visibility_summary(runs)
+    assert s.trials.tolist() == [1, 1] and s.offline.tolist() == ["hpr", "raycast"]

@@ -1,4 +1,5 @@
-"""Notebook 12, online parts: MAVAC's adaptive cleaning against a systematic baseline (issue 34).
+"""Notebook 12, online parts (issue 34): MAVAC's adaptive cleaning against a systematic baseline
+(Part 1), and what HPR's false-visible elements cost the online loop (Part 3, online half).
 
 MAVAC says a comparison with systematic coverage "would be valuable" but is "challenging due to
 the lack of established baselines". The baseline here is :func:`mavac.cleaning.systematic.run_systematic`:
@@ -7,6 +8,11 @@ can rest on, under the same impedance control and suction. Both run on Table 2's
 test bench; the sanding and milling machines together), with the paper's reading and its HPR
 plan (notebook 05's), at several dust densities: a share of the 10 cm heap grid, drawn with each
 trial's seed (:attr:`mavac.params.DustParams.density`).
+
+MAVAC names HPR's misclassification as its main limit. Part 3 runs the online loop on the HPR
+plan and on the exact ray-casting plan of each scene and counts, per trial, the heaps lying on
+elements the plan counts as observed that no pose of it sees under ray casting (HPR's
+false-visible elements), and how many of them no online image detected: HPR's price in heaps.
 
 Every run goes through :func:`mavac.parallel.map_trials` and takes its seed from its argument, so
 the table does not depend on scheduling and runs on a dask cluster unchanged.
@@ -25,9 +31,12 @@ from ..cleaning.replay import motion_totals
 from ..cleaning.systematic import run_systematic
 from ..cleaning.trial import run_trial
 from ..geometry.machines import load_machine
+from ..inspection.guards import guard_visibility
 from ..parallel import map_trials
 from ..robots.models import ur10_mobile
+from ..params import VISIBILITY_METHODS
 from ..validate import check_sequence
+from ..vision.visibility import VisibilityScene
 from ..viz.plots import new_figure
 from ..paper import paper_values
 from .mavac_online import PAPER_SCENES, SCENES, offline_plan, online_params, paper_scene_means
@@ -176,3 +185,80 @@ def comparison_vs_paper(summary: pd.DataFrame) -> pd.DataFrame:
             row[f"ours_{method}_sim_time_s"] = hit.sim_time_s
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+# ============================================================================ Part 3: online half
+
+#: per-trial columns of ``beyond_visibility_online_runs.csv``
+VISIBILITY_COLUMNS = ["scene", "offline", "seed", "C", "C_raycast", "guards", "heaps", "cleaned", "cleaning_pct",
+                      "heaps_counted", "heaps_false_visible", "false_visible_undetected", "false_visible_cleaned"]
+
+
+def visibility_items(*, scenes=SCENES, seeds=range(5), fast: bool = False) -> list[tuple]:
+    """The online trials of Part 3: ``(scene, offline, seed, fast)`` with the HPR plan (the
+    paper's) and the ray-casting plan."""
+    scenes, seeds = check_sequence("scenes", scenes), check_sequence("seeds", seeds)
+    return [(scene, offline, int(seed), bool(fast)) for scene in scenes for offline in VISIBILITY_METHODS
+            for seed in seeds]
+
+
+def heaps_on_elements(plan, heaps, vis_scene) -> dict:
+    """Per heap (its nearest surface element of the plan), whether the plan counts the element
+    observed (``counted``) and whether the plan's camera poses see it under exact ray casting
+    (``seen``); with ``C`` and ``C_raycast`` over the plan's elements.
+
+    Parameters
+    ----------
+    plan : InspectionPlan
+    heaps : (n, 3) float, metres
+    vis_scene : mavac.vision.visibility.VisibilityScene
+        The plan's machine, for ray casting.
+    """
+    from scipy.spatial import cKDTree
+
+    exact = dataclasses.replace(plan.params.visibility, method="raycast")
+    seen = (guard_visibility(plan.world_T_camera, plan.points, plan.normals, plan.params.camera, exact,
+                             vis_scene=vis_scene).any(axis=0) if len(plan.poses) else np.zeros(len(plan.points), bool))
+    nearest = cKDTree(plan.points).query(np.asarray(heaps, dtype=float).reshape(-1, 3))[1]
+    counted = plan.observed
+    return dict(counted=counted[nearest], seen=seen[nearest], C=float(counted.mean()), C_raycast=float(seen.mean()))
+
+
+def visibility_run(item: tuple) -> dict:
+    """One trial of :func:`visibility_items` and what HPR's false-visible elements cost it: heaps
+    on elements the plan counts observed but no pose of it sees, those never detected online
+    (``seen_by`` -1), and those cleaned anyway (vacuumed beside a detected heap)."""
+    scene, offline, seed, fast = item
+    machine = load_machine(scene)
+    plan = offline_plan(scene, "paper", offline=offline, fast=fast)
+    result = run_trial(machine, plan, params=online_params("paper", fast=fast), seed=seed)
+    on = heaps_on_elements(plan, result.heaps, VisibilityScene(machine.mesh))
+    false_visible = on["counted"] & ~on["seen"]
+    undetected = np.asarray(result.seen_by) < 0
+    return dict(scene=scene, offline=offline, seed=seed, C=round(on["C"], 4), C_raycast=round(on["C_raycast"], 4),
+                guards=result.guards, heaps=result.n_heaps, cleaned=result.n_cleaned,
+                cleaning_pct=round(result.cleaning_pct, 3), heaps_counted=int(on["counted"].sum()),
+                heaps_false_visible=int(false_visible.sum()),
+                false_visible_undetected=int((false_visible & undetected).sum()),
+                false_visible_cleaned=int((false_visible & result.cleaned).sum()))
+
+
+def visibility_runs(items, *, n_jobs=None) -> pd.DataFrame:
+    """Every trial of ``items`` (:func:`visibility_items`), one row each (:data:`VISIBILITY_COLUMNS`)."""
+    return pd.DataFrame(map_trials(visibility_run, items, n_jobs=n_jobs, desc="HPR online"),
+                        columns=VISIBILITY_COLUMNS)
+
+
+def visibility_summary(runs: pd.DataFrame) -> pd.DataFrame:
+    """Per scene and offline visibility: trials, the means of C, C under ray casting, guards
+    visited, heaps, cleaning percentage (with its 95 % interval) and the heaps on false-visible
+    elements (all, never detected, cleaned anyway)."""
+    rows = []
+    for (scene, offline), g in runs.groupby(["scene", "offline"], sort=False):
+        mean, low, high = _mean_ci(g.cleaning_pct)
+        rows.append(dict(scene=scene, offline=offline, trials=len(g), C=g.C.mean(), C_raycast=g.C_raycast.mean(),
+                         guards=g.guards.mean(), heaps=g.heaps.mean(), cleaning_pct=mean, cleaning_pct_low=low,
+                         cleaning_pct_high=high, heaps_false_visible=g.heaps_false_visible.mean(),
+                         false_visible_undetected=g.false_visible_undetected.mean(),
+                         false_visible_cleaned=g.false_visible_cleaned.mean()))
+    return pd.DataFrame(rows).round(3)
