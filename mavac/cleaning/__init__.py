@@ -14,5 +14,8 @@ One module per concept:
 * :mod:`~mavac.cleaning.timing` -- base travel and the simulated time per activity;
 * :mod:`~mavac.cleaning.misses` -- why each uncleaned heap was missed;
 * :mod:`~mavac.cleaning.readings` -- the paper's text and the authors' code as two readings;
-* :mod:`~mavac.cleaning.trial` -- ``run_trial``: the whole loop, scored.
+* :mod:`~mavac.cleaning.trial` -- ``run_trial``: the whole loop, scored;
+* :mod:`~mavac.cleaning.replay` -- the trial's motion on the simulated clock, and how far the arm moved;
+* :mod:`~mavac.cleaning.systematic` -- ``run_systematic``: the systematic baseline, a raster over every
+  surface dust can rest on, scored the same way.
 """

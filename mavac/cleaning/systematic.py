@@ -46,7 +46,7 @@ from .heaps import heaps_for_trial
 from .replay import Replay
 from .scene import build_cell
 from .timing import TrialTimes
-from .trial import _empty_result, _Run
+from .trial import TrialResult, _empty_result, _Run
 from .vacuum import VacuumLog, linear_move, path_move
 
 #: Ours: the tool's first axis over the raster, straight down: dust rests on faces within 60 deg
@@ -343,18 +343,10 @@ class SystematicResult:
     warnings: list = field(default_factory=list)
     wall_s: float = 0.0
 
-    @property
-    def n_heaps(self) -> int:
-        return int(len(self.heaps))
-
-    @property
-    def n_cleaned(self) -> int:
-        return int(np.count_nonzero(self.cleaned))
-
-    @property
-    def cleaning_pct(self) -> float:
-        """Cleaned heaps in per cent (0 when there are none)."""
-        return 100.0 * self.n_cleaned / self.n_heaps if self.n_heaps else 0.0
+    # scored as an online trial is, from ``heaps`` and ``cleaned``
+    n_heaps = TrialResult.n_heaps
+    n_cleaned = TrialResult.n_cleaned
+    cleaning_pct = TrialResult.cleaning_pct
 
     def row(self) -> dict:
         """One run's row: heaps, cleaned, the raster's counts and the simulated time, s."""
