@@ -108,8 +108,10 @@ $(RUNS): run-%:
 # Notebooks sharing an on-disk cache (build/cache) keep their order, so the first computes an
 # entry and the next reads it (never two computing it at once): 01-05 the machines'
 # reachability maps and offline plans; 06 -> 07 -> 08 the Kabir baseline reach sweeps; 12 the
-# maps of 01-04 and the baselines of 06-08 (05's online plans are entries of their own).
-# 00, 09, 10 and 11 use no disk cache: their place in a lane only balances the two lanes.
+# maps of 01-04, the baselines of 06-08 and 05's online plans (its online parts run on them).
+# 12 runs last, alone once 05 and 11 are done: the paper notebooks (00-11) then finish as they
+# did without it, and 12's trials get both cores. 00, 09, 10 and 11 use no disk cache: their
+# place in a lane only balances the two lanes.
 ifeq ($(ONLY),)
 run-01: run-00
 run-02: run-01
@@ -121,7 +123,7 @@ run-08: run-07
 run-09: run-08
 run-10: run-09
 run-11: run-10
-run-12: run-04 run-11
+run-12: run-05 run-11
 endif
 # Notebooks 05 and 12 run their trials on two workers: beside the other lane they share the
 # cores, and once it is done they have both (trials take their seeds from their arguments: same

@@ -352,7 +352,8 @@ def _clean_setup(args):
     except ValueError:
         raise ValueError(f"--seed {args.seed} with --trials {args.trials}: the last trial's seed "
                          f"{args.seed + args.trials - 1} is above 2**31 - 1") from None
-    online = OnlineParams(dust=DustParams(spacing=DustParams.spacing if args.spacing is None else args.spacing))
+    online = OnlineParams(dust=DustParams(spacing=DustParams.spacing if args.spacing is None else args.spacing,
+                                          density=args.density))
     offline = fast_params() if args.fast else InspectionParams()
     return dataclasses.replace(offline, seed=args.seed), online, list(range(args.seed, args.seed + args.trials))
 
@@ -440,6 +441,7 @@ def _clean_report(args, results, plan, online) -> tuple[dict, object]:
         "mesh": str(Path(args.mesh).resolve()), "machine": results[0].machine,
         "status": "; ".join(reasons) if reasons else "ok",
         "parameters": {"units": args.units, "up": args.up or "z", "spacing": online.dust.spacing,
+                       "density": online.dust.density,
                        "seed": args.seed, "trials": args.trials, "fast": args.fast, "plan_file": args.plan,
                        "inspection": dataclasses.asdict(plan.params), "online": dataclasses.asdict(online)},
         "plan": {"C": plan.C, "O": plan.O, "visibility": plan.visibility, "spots": plan.n_spots,
@@ -734,6 +736,9 @@ def _clean_parser(sub, fmt) -> None:
     p.add_argument("mesh", help="machine mesh: .stl, .obj, .ply or .dae")
     p.add_argument("--spacing", type=float, default=None,
                    help="distance between dust heaps, metres (default 0.10, the paper's)")
+    p.add_argument("--density", type=float, default=1.0,
+                   help="share of those heaps each trial keeps, drawn with its seed, in (0, 1] (default 1: every "
+                        "heap, as in the paper)")
     p.add_argument("--trials", type=int, default=1,
                    help="trials, each with its own heap layout: seeds --seed .. --seed + trials - 1")
     p.add_argument("--jobs", type=int, default=None, help="trials run at a time (-1: every core) (default: 1)")
@@ -823,7 +828,7 @@ def build_parser() -> argparse.ArgumentParser:
 #: parameter fields the command line sets -> their flags, to name the flag in an error
 FIELD_FLAGS = {"radius": "--hpr-radius", "surface_spacing": "--spacing", "spacing": "--spacing", "P_s": "--P-s",
                "P_g": "--P-g", "setup_time": "--setup-time", "t_max": "--t-max", "seed": "--seed",
-               "part_mass": "--mass", "max_rounds": "--rounds"}
+               "part_mass": "--mass", "max_rounds": "--rounds", "density": "--density"}
 
 
 def _with_flag(message: str) -> str:

@@ -553,9 +553,30 @@ def _cases_issue33_api():
     ]
 
 
+def _cases_issue34():
+    """The systematic baseline and notebook 12's online comparison."""
+    from mavac.cleaning.systematic import run_systematic
+    from mavac.experiments.beyond_online import comparison_items, visibility_items
+    from mavac.geometry.machines import load_machine
+
+    def sweep(plan, **kw):
+        return run_systematic(load_machine("test_bench"), plan, **kw)
+
+    return [
+        refuse("unnamed", "run_systematic-plan-None", lambda: sweep(None), TypeError, "plan"),
+        refuse("unnamed", "run_systematic-systematic-str", lambda: sweep(None, systematic="raster"), TypeError,
+               "systematic"),
+        refuse("wrong", "comparison_items-density-2", lambda: comparison_items(densities=(2.0,)), ValueError,
+               "densities"),
+        refuse("wrong", "comparison_items-scenes-str", lambda: comparison_items(scenes="test_bench"), TypeError,
+               "scenes"),
+        refuse("wrong", "visibility_items-seeds-5", lambda: visibility_items(seeds=5), TypeError, "seeds"),
+    ]
+
+
 def hand_written_cases() -> list[Case]:
     return (_cases_wrong() + _cases_dependency() + _cases_unnamed() + _cases_accepted() + _cases_stain_marking()
-            + _cases_hang() + _cases_process() + _cases_issue33())
+            + _cases_hang() + _cases_process() + _cases_issue33() + _cases_issue34())
 
 
 # ---- generated: every field of every parameter dataclass ----

@@ -150,3 +150,17 @@ def test_false_visible_heaps_are_counted_but_unseen_and_none_on_a_ray_cast_plan(
     assert on["C"] == pytest.approx(hpr.C, abs=1e-4) and on["counted"].tolist() == plans["hpr"].observed[:5].tolist()
     s = BO.visibility_summary(runs)
     assert s.trials.tolist() == [1, 1] and s.offline.tolist() == ["hpr", "raycast"]
+
+
+def test_an_online_sweep_point_on_a_dask_cluster_equals_the_local_backend(on_the_box):
+    distributed = pytest.importorskip("distributed", reason="install the dask extra: pip install -e '.[dask]'")
+    import joblib
+
+    items = [("adaptive", "box", (0.5,), 4, True), ("systematic", "box", (1.0, 0.5), 4, True)]
+    local = BO.comparison_runs(items, n_jobs=1)
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        with distributed.get_task_stream(client) as stream, joblib.parallel_backend("dask"):
+            remote = BO.comparison_runs(items, n_jobs=2)
+        assert len(stream.data) >= 2  # the runs went to the cluster's workers
+    assert local.equals(remote) and len(local) == 3

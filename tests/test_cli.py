@@ -449,9 +449,23 @@ def test_clean_same_seed_gives_the_same_csv_byte_for_byte(cleaned, tmp_path, cap
     assert "simulated time" in out and "wrote " in out
 
 
+def test_clean_density_keeps_a_share_of_the_same_layout(cleaned, tmp_path, capsys):
+    d, _ = cleaned
+    code, _, err = run(["clean", str(d / "box.stl"), *CLEAN_FAST, "--seed", "0", "--density", "0.5",
+                        "--out", str(tmp_path / "half.json")], capsys)
+    assert code == 0, err
+    full = pd.read_csv(d / "out" / "run.csv").query("seed == 0")
+    half = pd.read_csv(tmp_path / "half.csv")
+    assert len(half) == round(0.5 * len(full)) > 0
+    assert set(map(tuple, half[["x", "y", "z"]].round(9).values)) <= set(map(tuple, full[["x", "y", "z"]].round(9).values))
+    assert _strict_json(tmp_path / "half.json")["parameters"]["density"] == 0.5
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--trials", "0"], "--trials must be in [1, "),
     (["--spacing", "-1"], "--spacing: spacing must be in"),
+    (["--density", "0"], "--density: density must be in (0.0, 1.0]"),
+    (["--density", "1.5"], "--density: density must be in (0.0, 1.0]"),
     (["--out", "{mesh}"], "--out {mesh} is the input mesh"),
     (["--jobs", "0"], "--jobs must be a positive worker count"),
     (["--seed", str(2**31 - 1), "--trials", "2"], "--seed 2147483647 with --trials 2"),
