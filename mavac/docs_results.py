@@ -678,8 +678,8 @@ def beyond_visibility_online() -> Part:
              r.heaps_false_visible, r.false_visible_undetected, r.false_visible_cleaned] for r in ours.itertuples()]
     body = _table(["scene", "offline plan", "C", "C, ray casting", "guards visited", "heaps", "heaps cleaned (%)",
                    "heaps on false-visible elements", "of those, never detected", "of those, cleaned"], rows)
-    body += (f"\n\n**SIMULATED**, means over {int(ours['trials'].max())} trials per scene and plan, the paper's reading. "
-             "A false-visible element is counted observed by the plan and seen by none of its poses under exact "
+    body += (f"\n\n**SIMULATED**, means over {int(ours['trials'].max())} trials per scene and plan, the paper's "
+             "reading. A false-visible element is counted observed by the plan and seen by none of its poses under exact "
              "ray casting. " + _source("beyond_visibility_online.csv", paper=False))
     pct = ours.groupby("offline")["cleaning_pct"].mean()
     hpr = ours[ours["offline"] == "hpr"]

@@ -185,7 +185,8 @@ def test_held_passes_end_where_the_arm_backs_out_with_the_start_orientation(box_
     held = S.held_passes(robot, checker, plan.spots, raw, rng=np.random.default_rng(1))
     assert len(held) == len(raw) and any(len(p.waypoints) > 1 for p in held)
     for before, p in zip(raw, held):
-        assert len(p.waypoints) <= len(before.waypoints) and np.array_equal(p.waypoints, before.waypoints[:len(p.waypoints)])
+        k = len(p.waypoints)
+        assert k <= len(before.waypoints) and np.array_equal(p.waypoints, before.waypoints[:k])
         start, end = fk(robot, p.q_start), fk(robot, p.q_end)
         assert np.allclose(end[:3, :3], start[:3, :3], atol=1e-3)  # the orientation is held
         world_T_base = se2_to_matrix(*plan.spots[p.spot])
