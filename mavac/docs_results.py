@@ -709,12 +709,13 @@ def beyond_systematic() -> Part:
              "raster over every surface dust can rest on from the spots the adaptive loop stops at, under the same "
              "impedance control and suction; MAVAC ran no baseline. The time ratio is adaptive over systematic. "
              + _source("beyond_adaptive_vs_systematic.csv", paper=False))
-    total = ours.groupby(["density", "method"])["sim_time_s"].sum().unstack()
-    ratios = " / ".join(f"{total.loc[d, 'adaptive'] / total.loc[d, 'systematic']:.2f}"
-                        for d in sorted(total.index, reverse=True))
+    from .experiments.beyond_online import time_ratios
+
+    both = time_ratios(ours).query("scene == 'both'")  # sorted densest first
+    ratios = " / ".join(f"{r:.2f}" for r in both["time_ratio"])
     dense = ours[ours["density"] == ours["density"].max()].groupby("method")["cleaning_pct"].mean()
     found = (f"simulated time adaptive / systematic {ratios} at "
-             f"{' / '.join(f'{100 * d:.0f}' for d in sorted(total.index, reverse=True))} % dust (both scenes); "
+             f"{' / '.join(f'{100 * d:.0f}' for d in both['density'])} % dust (both scenes); "
              f"heaps cleaned at full density {dense['adaptive']:.1f} % / {dense['systematic']:.1f} %")
     return Part(body, "no baseline run (a comparison \"would be valuable\")", found)
 
