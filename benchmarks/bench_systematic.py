@@ -22,7 +22,7 @@ import pandas as pd
 
 from mavac.cleaning import systematic as S
 from mavac.config import DATA_DIR
-from mavac.experiments.beyond_online import comparison_run
+from mavac.experiments.beyond_online import comparison_rows, systematic_unit, unit_run
 from mavac.experiments.mavac_online import offline_plan, online_params
 from mavac.geometry.machines import load_machine
 from mavac.params import SystematicParams
@@ -54,7 +54,8 @@ def main() -> None:
     offline_plan(args.scene, "paper")  # fill the cache before the clock starts
     reach_cpu = reach_seconds(args.scene, args.seed)
     t0, c0 = time.perf_counter(), time.process_time()
-    (row,) = comparison_run(("systematic", args.scene, (1.0,), args.seed, False))
+    unit = systematic_unit(args.scene, (1.0,), args.seed)
+    (row,) = comparison_rows(unit, unit_run(unit))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     print(row)
     path = DATA_DIR / "results" / "beyond_adaptive_vs_systematic_runs.csv"

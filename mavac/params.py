@@ -841,6 +841,38 @@ class SystematicParams(CheckedFields):
 
 
 @dataclass(frozen=True)
+class PerturbationParams(CheckedFields):
+    """The world departing from what the offline plan and the robot assume
+    (``mavac.cleaning.perturbation``). Every default is 0: the paper's trials, where the robot is
+    where it believes, the machine where it was planned, and the camera noise-free. The sweeps of
+    notebook 12 (MAVAC claims its plan survives machines "slightly rearranged" with "no
+    additional scanning") set one field at a time."""
+
+    # Base localisation error at each spot: a Gaussian offset in the base frame, sigma per
+    # horizontal axis (m) and of the heading (deg); the robot plans at the spot it believes.
+    base_position_sigma: float = ranged(0.0, ge=0.0, le=1.0)
+    base_heading_sigma: float = ranged(0.0, ge=0.0, le=90.0)
+    # The machine moved after planning: this far (m) in a horizontal direction drawn per trial,
+    # and turned this much (deg, sign drawn per trial) about the vertical through its
+    # footprint's centre. The robot's collision model and plan stay where the machine was.
+    machine_shift: float = ranged(0.0, ge=0.0, le=5.0)
+    machine_rotation: float = ranged(0.0, ge=0.0, le=180.0)
+    # Per-pixel Gaussian noise on the depth image (sigma, m) and on each colour channel (sigma,
+    # 8-bit levels); the renderer's images are otherwise exact.
+    depth_noise: float = ranged(0.0, ge=0.0, le=1.0)
+    colour_noise: float = ranged(0.0, ge=0.0, le=255.0)
+    # Green-ish machine parts: this many static spheres of the dust's size and colour (inside the
+    # detector's HSV box: the worst case), area-uniform on the whole machine surface. They are
+    # detected, approached and vacuumed like dust and never go away.
+    decoys: int = ranged(0, ge=0, le=10_000)
+
+    @property
+    def is_null(self) -> bool:
+        """True when nothing is perturbed (the paper's trials)."""
+        return self == PerturbationParams()
+
+
+@dataclass(frozen=True)
 class OnlineParams(CheckedFields):
     """Everything a MAVAC online trial needs (``mavac.cleaning.trial.run_trial``)."""
 
@@ -848,6 +880,8 @@ class OnlineParams(CheckedFields):
     detection: DetectionParams = DetectionParams()
     approach: ApproachParams = ApproachParams()
     vacuum: VacuumParams = VacuumParams()
+    # The world as it really is, against the plan's (default: unperturbed).
+    perturbation: PerturbationParams = PerturbationParams()
     # MiR200 datasheet: maximum speed 1.1 m/s forward. Ours: base travel at that speed along
     # the shortest path around the machine (kinematic; no acceleration phases).
     base_speed: float = ranged(1.1, gt=0.0)

@@ -33,7 +33,7 @@ def box_scene():
 def on_the_box(box_scene, monkeypatch):
     machine, plan = box_scene
     monkeypatch.setattr(BO, "load_machine", lambda scene: machine)
-    monkeypatch.setattr(BO, "offline_plan", lambda scene, reading, *, fast: plan)
+    monkeypatch.setattr(BO, "offline_plan", lambda scene, reading, *, offline, fast: plan)
     monkeypatch.setattr(BO, "online_params", lambda reading, *, fast: OnlineParams(dust=DustParams(spacing=0.1)))
     return machine, plan
 
@@ -41,7 +41,9 @@ def on_the_box(box_scene, monkeypatch):
 def test_items_run_adaptive_per_density_and_systematic_once_for_all():
     items = BO.comparison_items(scenes=("a", "b"), densities=(1.0, 0.1), seeds=(1, 2, 3), fast=True)
     assert len(items) == 2 * 2 * 3 + 2 * 3 and {i[0] for i in items} == set(BO.METHODS)
-    assert items[0] == ("adaptive", "a", (1.0,), 1, True) and items[-1] == ("systematic", "b", (1.0, 0.1), 3, True)
+    assert items[0] == BO.adaptive_unit("a", 1, density=1.0, fast=True)
+    assert items[0] == ("adaptive", "a", "hpr", 1.0, BO.PerturbationParams(), 1.0, 1, True)
+    assert items[-1] == ("systematic", "b", (1.0, 0.1), 3, True)
     with pytest.raises(ValueError, match=r"densities must be in \(0, 1\]"):
         BO.comparison_items(densities=(0.0,))
 
@@ -50,7 +52,8 @@ def test_a_systematic_run_scores_each_density_on_the_subset_its_own_run_would_ha
     from mavac.cleaning.systematic import run_systematic
 
     machine, plan = on_the_box
-    full, sparse = BO.comparison_run(("systematic", "box", (1.0, 0.5), 4, True))
+    unit = BO.systematic_unit("box", (1.0, 0.5), 4, fast=True)
+    full, sparse = BO.comparison_rows(unit, BO.unit_run(unit))
     assert sparse["heaps"] == round(0.5 * full["heaps"]) and 0 <= sparse["cleaned"] <= sparse["heaps"]
     for column in ("sim_time_s", "tool_path_m", "joint_travel_rad"):
         assert sparse[column] == full[column] > 0
@@ -64,11 +67,12 @@ def test_adaptive_runs_the_online_trial_and_measures_its_motion(on_the_box):
     from mavac.cleaning.trial import run_trial
 
     machine, plan = on_the_box
-    (row,) = BO.comparison_run(("adaptive", "box", (1.0,), 4, True))
+    unit = BO.adaptive_unit("box", 4, fast=True)
+    (row,) = BO.comparison_rows(unit, BO.unit_run(unit))
     trial = run_trial(machine, plan, params=OnlineParams(dust=DustParams(spacing=0.1)), seed=4)
     assert row["cleaned"] == trial.n_cleaned and row["sim_time_s"] == round(trial.times.sim_time_s, 3)
     assert row["tool_path_m"] > 0 and row["joint_travel_rad"] > 0
-    runs = BO.comparison_runs([("systematic", "box", (0.5, 1.0), 4, True), ("adaptive", "box", (1.0,), 4, True)])
+    runs = BO.comparison_runs([BO.systematic_unit("box", (0.5, 1.0), 4, fast=True), unit])
     assert list(runs.columns) == BO.RUN_COLUMNS
     assert runs[["method", "density"]].values.tolist() == [["adaptive", 1.0], ["systematic", 1.0], ["systematic", 0.5]]
 
@@ -135,8 +139,8 @@ def box_plans(box_scene):
 
 def test_visibility_items_pair_each_seed_with_both_plans():
     items = BO.visibility_items(scenes=("a",), seeds=(1, 2), fast=True)
-    assert items == [("a", "hpr", 1, True), ("a", "hpr", 2, True), ("a", "raycast", 1, True),
-                     ("a", "raycast", 2, True)]
+    assert items == [BO.adaptive_unit("a", seed, offline=offline, fast=True) for offline in ("hpr", "raycast")
+                     for seed in (1, 2)]
 
 
 def test_false_visible_heaps_are_counted_but_unseen_and_none_on_a_ray_cast_plan(box_plans, monkeypatch):
@@ -162,7 +166,7 @@ def test_an_online_sweep_point_on_a_dask_cluster_equals_the_local_backend(on_the
     distributed = pytest.importorskip("distributed", reason="install the dask extra: pip install -e '.[dask]'")
     import joblib
 
-    items = [("adaptive", "box", (0.5,), 4, True), ("systematic", "box", (1.0, 0.5), 4, True)]
+    items = [BO.adaptive_unit("box", 4, density=0.5, fast=True), BO.systematic_unit("box", (1.0, 0.5), 4, fast=True)]
     local = BO.comparison_runs(items, n_jobs=1)
     with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:

@@ -370,7 +370,10 @@ def _sweep_spots(run: _Run, spots, passes: list[RasterPass], result: SystematicR
             result.warnings.append(f"arm could not fold home before spot {s}: {result.passes_skipped} pass(es) skipped")
             return
         first = False
-        run.drive_to(spots[s])
+        if not run.drive_to(spots[s]):  # only under a perturbation: the machine is where the base would stop
+            result.passes_skipped += len(mine)
+            result.warnings.append(f"spot {s}: the base cannot stop there: {len(mine)} pass(es) skipped")
+            continue
         for k, p in mine:
             motion = run.plan(p.q_start, "raster motion", k)
             if not motion.solved:

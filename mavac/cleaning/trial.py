@@ -20,6 +20,12 @@ home (collision-free when executed, at the same base pose: ``folds_retraced``); 
 path is no longer free does the trial stop, counting the poses it skipped. Heaps that only a
 skipped pose would have seen get the miss cause ``"guard not reached"``.
 
+Under a :class:`mavac.params.PerturbationParams` (``params.perturbation``) the world departs
+from the plan (:mod:`mavac.cleaning.perturbation`): the simulator places the base, renders and
+scores in the true frame, while the robot plans, detects and filters in the frame it believes.
+Every contact the arm makes with the machine while it tracks a planned motion (not while it
+vacuums) is logged (``transit_contacts``).
+
 A trial never raises for a hard scene: no heaps, an empty plan, nothing in view, no dust
 detected or an unreachable area give a result (0 % where nothing was cleaned) with the reason.
 """
@@ -33,7 +39,8 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ..geometry.machines import Machine
-from ..geometry.transforms import matrix_to_se2, se2_to_matrix
+from ..geometry.transforms import matrix_to_se2, se2_to_matrix, transform_points
+from ..inspection.spots import collision_free_spots
 from ..params import OnlineParams
 from ..robots.kinematics import fk
 from ..robots.models import RobotModel, ur10_mobile
@@ -49,6 +56,7 @@ from .heaps import heaps_for_trial
 from .misses import (CAUSE_DTYPE, CAUSES, HeapEvents, cause_counts, in_frustum, mark_blobs, miss_causes,
                      near_frustum)
 from .motion import Motion, plan_arm_motion
+from .perturbation import decoy_positions, localisation_error, machine_motion, noisy_images, true_base_pose
 from .replay import Replay, ReplayRecorder
 from .scene import build_cell
 from .timing import TrialTimes, base_path_length
@@ -115,6 +123,12 @@ class TrialResult:
     seen_by : (n,) int or None
         Per heap, the first pose of the plan (a row of ``plan.poses``) whose detection found it
         (a node matched to it), -1 if none did (scoring only: the match uses the true positions).
+    transit_contacts : list of float, N
+        Peak robot-machine normal force of every tracked motion (guard, approach, fold home)
+        during which the arm touched the machine; vacuuming contact is in ``peak_forces``.
+    spots_blocked : int
+        Drives that could not stop at their spot because the robot would collide with the
+        machine there (only under a perturbation); their poses are skipped.
     """
 
     machine: str
@@ -142,6 +156,8 @@ class TrialResult:
     rrt_approach_seconds: list = field(default_factory=list)
     replay: Replay | None = None
     seen_by: np.ndarray | None = None
+    transit_contacts: list = field(default_factory=list)
+    spots_blocked: int = 0
 
     @property
     def n_heaps(self) -> int:
@@ -232,14 +248,18 @@ class TrialResult:
     def row(self) -> dict:
         """One trial's row: the Table 2 columns (``data/results/mavac_table2.csv``), then
         ``guards``, ``replanned``, ``guards_unreachable``, ``fold_failures``, ``folds_retraced``
-        and ``poses_skipped`` (failed motions are counted, never hidden), then the simulated and
-        wall time, s."""
+        and ``poses_skipped`` (failed motions are counted, never hidden), the motions that touched
+        the machine and their largest force (N), the spots the base could not stop at, then the
+        simulated and wall time, s."""
         return dict(machine=self.machine, trial=None, seed=self.seed, heaps=self.n_heaps, cleaned=self.n_cleaned,
                     uncleaned=self.n_heaps - self.n_cleaned, cleaning_pct=round(self.cleaning_pct, 3),
                     detected=self.detected, precision=round(self.precision, 4), recall=round(self.recall, 4),
                     guards=self.guards, replanned=self.replanned, guards_unreachable=self.guards_unreachable,
                     fold_failures=self.fold_failures, folds_retraced=self.folds_retraced,
-                    poses_skipped=self.poses_skipped, sim_time_s=round(self.times.sim_time_s, 3),
+                    poses_skipped=self.poses_skipped, transit_contacts=len(self.transit_contacts),
+                    transit_peak_force=round(max(self.transit_contacts, default=0.0), 1),
+                    spots_blocked=self.spots_blocked,
+                    sim_time_s=round(self.times.sim_time_s, 3),
                     wall_s=round(self.wall_s, 2))
 
 
@@ -257,6 +277,8 @@ class _Run:
         self.fov_y = float(np.degrees(2.0 * camera.theta_b))  # the FOV pyramid's height
         self.K = intrinsics_from_fov(d.width, d.height, self.fov_y)
         self.recorder = ReplayRecorder(matrix_to_se2(cell.world_T_base), cell.q_cmd, result.n_heaps)
+        self.plan_T_moved = machine_motion(machine.mesh, params.perturbation, seed)
+        self.drives = self.images = 0  # indices of the localisation and image-noise draws
 
     def execute(self, plan, progress: bool = False) -> None:
         """Algorithm 1, line 1-3 and the loop: every pose of T in order, folding and driving
@@ -264,13 +286,17 @@ class _Run:
         ``progress``: a tqdm bar over the poses, with the heaps cleaned so far."""
         n = self.result.n_heaps
         with tqdm(total=len(plan.poses), desc="guard poses", unit="pose", disable=not progress, leave=False) as bar:
+            reached = True
             for i, pose in enumerate(plan.poses):
                 if i == 0 or plan.pose_spot[i] != plan.pose_spot[i - 1]:
                     if i > 0 and not self.fold_home(i):
                         self.skip(plan.poses[i:], f"arm could not fold home before pose {i}")
                         return
-                    self.drive_to(pose[:3])
-                self.inspect_and_clean(i, pose)
+                    reached = self.drive_to(pose[:3])
+                if reached:
+                    self.inspect_and_clean(i, pose)
+                else:
+                    self.skip(pose, f"pose {i}: the base cannot stop at its spot (the machine is in the way)")
                 bar.set_postfix_str(f"{int(np.count_nonzero(self.cell.dust.cleaned))} of {n} heaps cleaned",
                                     refresh=False)
                 bar.update()
@@ -325,31 +351,43 @@ class _Run:
             return None
         return back
 
-    def drive_to(self, spot) -> None:
+    def drive_to(self, spot) -> bool:
         """Drive the base (arm folded) to ``spot`` (x, y, theta), along the shortest path around
-        the machine."""
-        cell = self.cell
-        start = cell.world_T_base[:2, 3]
-        length = base_path_length(start, spot[:2], self.machine.footprint, self.params.base_clearance)
+        the machine. False, with the base left where it was, when the robot would collide with
+        the machine where it really lands (the offline test of a spot,
+        :func:`mavac.inspection.spots.collision_free_spots`): its safety scanners stop it."""
+        cell, perturbation = self.cell, self.params.perturbation
+        believed = se2_to_matrix(*spot)
+        truth = true_base_pose(believed, self.plan_T_moved, localisation_error(perturbation, self.seed, self.drives))
+        self.drives += 1
+        if not np.array_equal(truth, believed) and not collision_free_spots(cell.robot, self.machine.mesh,
+                                                                            [matrix_to_se2(truth)])[0]:
+            self.result.spots_blocked += 1
+            return False
+        length = base_path_length(cell.world_T_base[:2, 3], spot[:2], self.machine.footprint,
+                                  self.params.base_clearance)
         self.result.times.base_s += length / self.params.base_speed
-        self.recorder.base_drive(spot, length / self.params.base_speed)
-        cell.move_base(se2_to_matrix(*spot))
+        shown = spot if perturbation.is_null else matrix_to_se2(truth)  # the replay shows the truth
+        self.recorder.base_drive(shown, length / self.params.base_speed)
+        cell.move_base(believed, true_world_T_base=truth)
+        return True
 
     def skip(self, poses, why: str) -> None:
         """Count ``poses`` (rows of T) as skipped; heaps in their planned view frustums are marked
         so that a miss there has its cause."""
         d, robot = self.params.detection, self.cell.robot
         for pose in np.atleast_2d(poses):
-            world_T_camera = se2_to_matrix(*pose[:3]) @ fk(robot, pose[3:], robot.camera_frame) @ mavac_T_opencv()
+            planned = se2_to_matrix(*pose[:3]) @ fk(robot, pose[3:], robot.camera_frame)
+            world_T_camera = self.cell.truth_T_belief @ planned @ mavac_T_opencv()
             seen = in_frustum(self.cell.dust.positions, world_T_camera, self.K, d.width, d.height, NEAR, FAR)
             self.events.mark("in_skipped_view", np.flatnonzero(seen))
         self.result.poses_skipped += len(np.atleast_2d(poses))
         self.result.warnings.append(f"{why}: {len(np.atleast_2d(poses))} pose(s) skipped")
 
     def look(self):
-        """RGB-D image from the camera where the arm really is; marks frustum/image ground truth.
-        Returns rgb, depth, world_T_camera and (h, w) the heap index drawn at each pixel
-        (-1: none; scoring only)."""
+        """RGB-D image (with the perturbation's noise) from the camera where the arm really is;
+        marks frustum/image ground truth. Returns rgb, depth, world_T_camera as the robot
+        estimates it, and (h, w) the heap index drawn at each pixel (-1: none; scoring only)."""
         d, cell = self.params.detection, self.cell
         world_T_camera = cell.sim.world_T_link(cell.robot.camera_frame) @ mavac_T_opencv()
         shown = near_frustum(cell.dust.positions, world_T_camera, self.K, d.width, d.height, NEAR, FAR,
@@ -363,7 +401,10 @@ class _Run:
         ids, inverse = np.unique(seg, return_inverse=True)
         heap_of_id = cell.dust.index_of_bodies(ids, bodies)
         self.events.mark("in_image", heap_of_id)
-        return rgb, depth, world_T_camera, heap_of_id[inverse].reshape(np.shape(seg))
+        rgb, depth = noisy_images(rgb, depth, self.params.perturbation, self.seed, self.images)
+        self.images += 1
+        return (rgb, depth, np.linalg.solve(cell.truth_T_belief, world_T_camera),
+                heap_of_id[inverse].reshape(np.shape(seg)))
 
     def inspect_and_clean(self, i: int, pose) -> None:
         """Algorithm 1, lines 3-16 at pose ``i`` (a row of T: spot, then guard configuration)."""
@@ -377,14 +418,15 @@ class _Run:
         rgb, depth, world_T_camera, seg_heaps = self.look()
         det = detect_dust(rgb, depth, self.K, world_T_camera, self.params.detection)
         located = np.all(np.isfinite(det.nodes), axis=1)
-        heap_of = match_nodes(det.nodes, self.cell.dust.positions, self.params.detection.match_radius)
+        heap_of = match_nodes(transform_points(self.cell.truth_T_belief, det.nodes), self.cell.dust.positions,
+                              self.params.detection.match_radius)  # scoring, in the true frame
         mark_blobs(self.events, det.blobs, seg_heaps, heap_of)
         self.result.detected += int(located.sum())
         self.result.true_positives += int(np.count_nonzero(heap_of[located] >= 0))
         found = heap_of[heap_of >= 0]
         self.matched[found] = True
         self.result.seen_by[found[self.result.seen_by[found] < 0]] = i
-        shoulder = self.cell.sim.world_T_link(SHOULDER_LINK)[:3, 3]
+        shoulder = self.cell.world_T_link(SHOULDER_LINK)[:3, 3]
         world_T_guard_tool = self.cell.world_T_tool()
         why = filter_nodes(det.nodes, det.depth, shoulder=shoulder, vacuumed=self.vacuumed,
                            params=self.params.detection, tip=world_T_guard_tool[:3, 3])
@@ -481,10 +523,12 @@ def run_trial(machine: Machine, plan, *, robot=None, params: OnlineParams | None
         return _empty_result(machine.name, seed, heaps, "empty plan: no guard pose to inspect from")
     result = _empty_result(machine.name, seed, heaps, "")
     with SimWorld(time_step=params.time_step, seed=seed) as world:
-        cell = build_cell(world, machine, robot, heaps, params, se2_to_matrix(*plan.poses[0, :3]))
+        cell = build_cell(world, machine, robot, heaps, params, se2_to_matrix(*plan.poses[0, :3]),
+                          decoys=decoy_positions(machine.mesh, params.perturbation.decoys, seed))
         run = _Run(cell, machine, params, seed, result, plan.params.camera)
         run.execute(plan, progress)
         result.cleaned = cell.dust.cleaned.copy()
+        result.transit_contacts = list(cell.transit_contacts)
         result.replay = run.recorder.replay()
     _score(result, run)
     result.wall_s = time.perf_counter() - t0

@@ -34,7 +34,7 @@ from ..geometry.machines import load_machine
 from ..inspection.guards import guard_visibility
 from ..parallel import map_trials
 from ..robots.models import ur10_mobile
-from ..params import VISIBILITY_METHODS
+from ..params import VISIBILITY_METHODS, OnlineParams, PerturbationParams
 from ..validate import check_sequence
 from ..vision.visibility import VisibilityScene
 from ..viz.plots import new_figure
@@ -52,18 +52,68 @@ RUN_COLUMNS = ["method", "scene", "density", "seed", "heaps", "cleaned", "cleani
 MEASURES = ("cleaning_pct", "sim_time_s", "tool_path_m", "joint_travel_rad", "time_per_cleaned_heap_s")
 
 
+def adaptive_unit(scene: str, seed: int, *, offline: str = "hpr", density: float = 1.0,
+                  perturbation: PerturbationParams = PerturbationParams(), suction_scale: float = 1.0,
+                  fast: bool = False) -> tuple:
+    """One online trial (Algorithm 1, the paper's reading) as a hashable unit of work:
+    ``("adaptive", scene, offline, density, perturbation, suction_scale, seed, fast)``."""
+    return ("adaptive", scene, offline, float(density), perturbation, float(suction_scale), int(seed), bool(fast))
+
+
+def systematic_unit(scene: str, densities, seed: int, *, fast: bool = False) -> tuple:
+    """One run of the systematic baseline, scored at every density: ``("systematic", scene,
+    densities, seed, fast)``."""
+    return ("systematic", scene, tuple(float(d) for d in densities), int(seed), bool(fast))
+
+
+def unit_params(unit: tuple) -> OnlineParams:
+    """The online parameters of a unit: the paper's reading with its density, perturbation and
+    suction radius."""
+    if unit[0] == "systematic":
+        return online_params("paper", fast=unit[-1])
+    _, _, _, density, perturbation, suction_scale, _, fast = unit
+    params = online_params("paper", fast=fast)
+    vacuum = dataclasses.replace(params.vacuum, suction_radius=params.vacuum.suction_radius * suction_scale)
+    return dataclasses.replace(params, dust=dataclasses.replace(params.dust, density=density), vacuum=vacuum,
+                               perturbation=perturbation)
+
+
+def unit_run(unit: tuple) -> dict:
+    """Run one unit (module level: picklable for any joblib backend). Returns what every part
+    reads from it: the result's ``row``, ``times``, ``heaps``, ``cleaned``, ``seen_by`` (None for
+    the baseline) and ``motion`` (tool path, m, and joint travel, rad, over the replay)."""
+    scene, seed, fast = unit[1], unit[-2], unit[-1]
+    machine = load_machine(scene)
+    if unit[0] == "adaptive":
+        plan = offline_plan(scene, "paper", offline=unit[2], fast=fast)
+        result = run_trial(machine, plan, params=unit_params(unit), seed=seed)
+    else:
+        plan = offline_plan(scene, "paper", offline="hpr", fast=fast)
+        result = run_systematic(machine, plan, params=unit_params(unit), seed=seed)
+    motion = motion_totals(result.replay, ur10_mobile()) if result.replay is not None else (0.0, 0.0)
+    return dict(row=result.row(), times=result.times, heaps=result.heaps, cleaned=result.cleaned,
+                seen_by=getattr(result, "seen_by", None), motion=motion)
+
+
+def run_units(units, *, n_jobs=None, desc: str = "online runs") -> dict:
+    """Every distinct unit of ``units`` run once (one :func:`mavac.parallel.map_trials` call, in
+    first-seen order): ``{unit: unit_run(unit)}``. Parts that share a trial share its run."""
+    distinct = list(dict.fromkeys(check_sequence("units", units)))
+    return dict(zip(distinct, map_trials(unit_run, distinct, n_jobs=n_jobs, desc=desc)))
+
+
 def comparison_items(*, scenes=SCENES, densities=DENSITIES, seeds=range(5), fast: bool = False) -> list[tuple]:
-    """The runs of the comparison, each ``(method, scene, densities, seed, fast)``: one adaptive
-    trial per density, one systematic run for all densities (its motion ignores the dust, so a
+    """The runs of the comparison: one adaptive trial per density (:func:`adaptive_unit`), one
+    systematic run for all densities (:func:`systematic_unit`; its motion ignores the dust, so a
     sparser layout, a subset of the full one, is scored on the full run's vacuumed heaps)."""
     scenes, densities, seeds = (check_sequence(n, v) for n, v in
                                 (("scenes", scenes), ("densities", densities), ("seeds", seeds)))
     for d in densities:
         if not 0.0 < float(d) <= 1.0:
             raise ValueError(f"densities must be in (0, 1], got {d!r}")
-    densities = tuple(float(d) for d in densities)
-    adaptive = [("adaptive", scene, (d,), int(seed), bool(fast)) for scene in scenes for d in densities for seed in seeds]
-    return adaptive + [("systematic", scene, densities, int(seed), bool(fast)) for scene in scenes for seed in seeds]
+    adaptive = [adaptive_unit(scene, seed, density=d, fast=fast) for scene in scenes for d in densities
+                for seed in seeds]
+    return adaptive + [systematic_unit(scene, densities, seed, fast=fast) for scene in scenes for seed in seeds]
 
 
 def _row(method, scene, density, seed, n_heaps, n_cleaned, times, tool_m, joints_rad) -> dict:
@@ -74,40 +124,32 @@ def _row(method, scene, density, seed, n_heaps, n_cleaned, times, tool_m, joints
                 time_per_cleaned_heap_s=round(times.sim_time_s / n_cleaned, 3) if n_cleaned else np.nan)
 
 
-def comparison_run(item: tuple) -> list[dict]:
-    """The rows of one item of :func:`comparison_items`, one per density (module level:
-    picklable for any joblib backend)."""
-    method, scene, densities, seed, fast = item
-    machine = load_machine(scene)
-    plan = offline_plan(scene, "paper", fast=fast)
-    params = online_params("paper", fast=fast)
-    if method == "adaptive":
-        params = dataclasses.replace(params, dust=dataclasses.replace(params.dust, density=densities[0]))
-        result = run_trial(machine, plan, params=params, seed=seed)
-    else:
-        result = run_systematic(machine, plan, params=params, seed=seed)
-    motion = motion_totals(result.replay, ur10_mobile()) if result.replay is not None else (0.0, 0.0)
+def comparison_rows(unit: tuple, outcome: dict) -> list[dict]:
+    """The rows of one unit of :func:`comparison_items`, one per density it is scored at."""
+    method, scene, seed = unit[0], unit[1], unit[-2]
+    densities = unit[2] if method == "systematic" else (unit[3],)
     rows = []
     for d in densities:
-        kept = np.arange(result.n_heaps) if method == "adaptive" else density_subset(result.n_heaps, d, seed)
-        rows.append(_row(method, scene, d, seed, len(kept), int(np.count_nonzero(result.cleaned[kept])),
-                         result.times, *motion))
+        n = len(outcome["cleaned"])
+        kept = np.arange(n) if method == "adaptive" else density_subset(n, d, seed)
+        rows.append(_row(method, scene, d, seed, len(kept), int(np.count_nonzero(outcome["cleaned"][kept])),
+                         outcome["times"], *outcome["motion"]))
     return rows
 
 
-def comparison_runs(items, *, n_jobs=None) -> pd.DataFrame:
+def comparison_runs(items, *, n_jobs=None, outcomes: dict | None = None) -> pd.DataFrame:
     """Every run of ``items`` (:func:`comparison_items`), one row per run and density
-    (:data:`RUN_COLUMNS`), sorted by method, scene, density (dense first) and seed."""
-    rows = [row for rows in map_trials(comparison_run, items, n_jobs=n_jobs, desc="adaptive vs systematic")
-            for row in rows]
-    runs = pd.DataFrame(rows, columns=RUN_COLUMNS)
+    (:data:`RUN_COLUMNS`), sorted by method, scene, density (dense first) and seed. ``outcomes``:
+    the units already run (:func:`run_units`), else they run here."""
+    outcomes = run_units(items, n_jobs=n_jobs, desc="adaptive vs systematic") if outcomes is None else outcomes
+    runs = pd.DataFrame([row for unit in items for row in comparison_rows(unit, outcomes[unit])], columns=RUN_COLUMNS)
     rank = dict(_m=runs.method.map({m: i for i, m in enumerate(METHODS)}),
                 _s=runs.scene.map({s: i for i, s in enumerate(dict.fromkeys(runs.scene))}))
     return (runs.assign(**rank).sort_values(["_m", "_s", "density", "seed"], ascending=[True, True, False, True],
                                             kind="stable").drop(columns=list(rank)).reset_index(drop=True))
 
 
-def _mean_ci(values) -> tuple[float, float, float]:
+def mean_ci(values) -> tuple[float, float, float]:
     """Mean and its 95 % Student-t interval (NaN bounds below two values or with no spread)."""
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
@@ -127,7 +169,7 @@ def comparison_summary(runs: pd.DataFrame) -> pd.DataFrame:
     for (method, scene, density), g in runs.groupby(["method", "scene", "density"], sort=False):
         row = dict(method=method, scene=scene, density=density, runs=len(g), heaps=float(g.heaps.mean()))
         for m in MEASURES:
-            row[m], row[f"{m}_low"], row[f"{m}_high"] = _mean_ci(g[m])
+            row[m], row[f"{m}_low"], row[f"{m}_high"] = mean_ci(g[m])
         rows.append(row)
     return pd.DataFrame(rows).round(3)
 
@@ -195,14 +237,24 @@ VISIBILITY_COLUMNS = ["scene", "offline", "seed", "C", "C_raycast", "guards", "h
 
 
 def visibility_items(*, scenes=SCENES, seeds=range(5), fast: bool = False) -> list[tuple]:
-    """The online trials of Part 3: ``(scene, offline, seed, fast)`` with the HPR plan (the
-    paper's) and the ray-casting plan."""
+    """The online trials of Part 3 (:func:`adaptive_unit`) with the HPR plan (the paper's) and
+    the ray-casting plan."""
     scenes, seeds = check_sequence("scenes", scenes), check_sequence("seeds", seeds)
-    return [(scene, offline, int(seed), bool(fast)) for scene in scenes for offline in VISIBILITY_METHODS
-            for seed in seeds]
+    return [adaptive_unit(scene, seed, offline=offline, fast=fast) for scene in scenes
+            for offline in VISIBILITY_METHODS for seed in seeds]
 
 
-def heaps_on_elements(plan, heaps, vis_scene) -> dict:
+def elements_seen(plan, vis_scene) -> np.ndarray:
+    """(m,) bool: which of the plan's surface elements its camera poses see under exact ray
+    casting."""
+    exact = dataclasses.replace(plan.params.visibility, method="raycast")
+    if not len(plan.poses):
+        return np.zeros(len(plan.points), bool)
+    return guard_visibility(plan.world_T_camera, plan.points, plan.normals, plan.params.camera, exact,
+                            vis_scene=vis_scene).any(axis=0)
+
+
+def heaps_on_elements(plan, heaps, vis_scene, *, seen=None) -> dict:
     """Per heap (its nearest surface element of the plan), whether the plan counts the element
     observed (``counted``) and whether the plan's camera poses see it under exact ray casting
     (``seen``); with ``C`` and ``C_raycast`` over the plan's elements.
@@ -213,40 +265,48 @@ def heaps_on_elements(plan, heaps, vis_scene) -> dict:
     heaps : (n, 3) float, metres
     vis_scene : mavac.vision.visibility.VisibilityScene
         The plan's machine, for ray casting.
+    seen : (m,) bool, optional
+        :func:`elements_seen` of the plan, if already computed.
     """
     from scipy.spatial import cKDTree
 
-    exact = dataclasses.replace(plan.params.visibility, method="raycast")
-    seen = (guard_visibility(plan.world_T_camera, plan.points, plan.normals, plan.params.camera, exact,
-                             vis_scene=vis_scene).any(axis=0) if len(plan.poses) else np.zeros(len(plan.points), bool))
+    seen = elements_seen(plan, vis_scene) if seen is None else seen
     nearest = cKDTree(plan.points).query(np.asarray(heaps, dtype=float).reshape(-1, 3))[1]
     counted = plan.observed
     return dict(counted=counted[nearest], seen=seen[nearest], C=float(counted.mean()), C_raycast=float(seen.mean()))
 
 
-def visibility_run(item: tuple) -> dict:
+def visibility_row(unit: tuple, outcome: dict, on: dict) -> dict:
     """One trial of :func:`visibility_items` and what HPR's false-visible elements cost it: heaps
     on elements the plan counts observed but no pose of it sees, those never detected online
-    (``seen_by`` -1), and those cleaned anyway (vacuumed beside a detected heap)."""
-    scene, offline, seed, fast = item
-    machine = load_machine(scene)
-    plan = offline_plan(scene, "paper", offline=offline, fast=fast)
-    result = run_trial(machine, plan, params=online_params("paper", fast=fast), seed=seed)
-    on = heaps_on_elements(plan, result.heaps, VisibilityScene(machine.mesh))
+    (``seen_by`` -1), and those cleaned anyway (vacuumed beside a detected heap). ``on``:
+    :func:`heaps_on_elements` of the trial's heaps."""
+    _, scene, offline, *_, seed, _ = unit
+    row, cleaned = outcome["row"], outcome["cleaned"]
     false_visible = on["counted"] & ~on["seen"]
-    undetected = np.asarray(result.seen_by) < 0
+    undetected = np.asarray(outcome["seen_by"]) < 0
     return dict(scene=scene, offline=offline, seed=seed, C=round(on["C"], 4), C_raycast=round(on["C_raycast"], 4),
-                guards=result.guards, heaps=result.n_heaps, cleaned=result.n_cleaned,
-                cleaning_pct=round(result.cleaning_pct, 3), heaps_counted=int(on["counted"].sum()),
-                heaps_false_visible=int(false_visible.sum()),
+                guards=row["guards"], heaps=row["heaps"], cleaned=row["cleaned"], cleaning_pct=row["cleaning_pct"],
+                heaps_counted=int(on["counted"].sum()), heaps_false_visible=int(false_visible.sum()),
                 false_visible_undetected=int((false_visible & undetected).sum()),
-                false_visible_cleaned=int((false_visible & result.cleaned).sum()))
+                false_visible_cleaned=int((false_visible & cleaned).sum()))
 
 
-def visibility_runs(items, *, n_jobs=None) -> pd.DataFrame:
-    """Every trial of ``items`` (:func:`visibility_items`), one row each (:data:`VISIBILITY_COLUMNS`)."""
-    return pd.DataFrame(map_trials(visibility_run, items, n_jobs=n_jobs, desc="HPR online"),
-                        columns=VISIBILITY_COLUMNS)
+def visibility_runs(items, *, n_jobs=None, outcomes: dict | None = None) -> pd.DataFrame:
+    """Every trial of ``items`` (:func:`visibility_items`), one row each (:data:`VISIBILITY_COLUMNS`);
+    the ray casting of each plan's poses is done once per scene and plan."""
+    outcomes = run_units(items, n_jobs=n_jobs, desc="HPR online") if outcomes is None else outcomes
+    seen: dict = {}
+    rows = []
+    for unit in items:
+        scene, offline, fast = unit[1], unit[2], unit[-1]
+        plan = offline_plan(scene, "paper", offline=offline, fast=fast)
+        vis_scene = VisibilityScene(load_machine(scene).mesh)
+        if (scene, offline, fast) not in seen:
+            seen[scene, offline, fast] = elements_seen(plan, vis_scene)
+        on = heaps_on_elements(plan, outcomes[unit]["heaps"], vis_scene, seen=seen[scene, offline, fast])
+        rows.append(visibility_row(unit, outcomes[unit], on))
+    return pd.DataFrame(rows, columns=VISIBILITY_COLUMNS)
 
 
 def visibility_summary(runs: pd.DataFrame) -> pd.DataFrame:
@@ -255,7 +315,7 @@ def visibility_summary(runs: pd.DataFrame) -> pd.DataFrame:
     elements (all, never detected, cleaned anyway)."""
     rows = []
     for (scene, offline), g in runs.groupby(["scene", "offline"], sort=False):
-        mean, low, high = _mean_ci(g.cleaning_pct)
+        mean, low, high = mean_ci(g.cleaning_pct)
         rows.append(dict(scene=scene, offline=offline, trials=len(g), C=g.C.mean(), C_raycast=g.C_raycast.mean(),
                          guards=g.guards.mean(), heaps=g.heaps.mean(), cleaning_pct=mean, cleaning_pct_low=low,
                          cleaning_pct_high=high, heaps_false_visible=g.heaps_false_visible.mean(),

@@ -162,6 +162,9 @@ class JointLog:
     tau : (k, nv) float, N m
     duration : float, s
         Simulated time of the motion (trajectory plus settling).
+    peak_contact_force : float, N
+        Largest summed normal force between the robot and ``contact_body`` over every step
+        (0 when no body was watched).
     """
 
     t: np.ndarray
@@ -169,6 +172,7 @@ class JointLog:
     q_des: np.ndarray
     tau: np.ndarray
     duration: float
+    peak_contact_force: float = 0.0
 
     @property
     def max_error(self) -> float:
@@ -223,7 +227,7 @@ def time_parametrise(qs, *, max_velocity, max_acceleration, dt) -> tuple[np.ndar
 
 def follow_joint_trajectory(world, robot, model, qs, *, dt=None, kp=400.0, kd=40.0, max_velocity=1.0,
                             max_acceleration=2.0, settle_tol: float = 1e-3, max_settle_steps: int = 240,
-                            log_every: int = 1) -> JointLog:
+                            log_every: int = 1, contact_body: int | None = None) -> JointLog:
     """Torque-controlled tracking of a joint path in pybullet (computed torque from pinocchio).
 
     Parameters
@@ -246,6 +250,9 @@ def follow_joint_trajectory(world, robot, model, qs, *, dt=None, kp=400.0, kd=40
         ``max_settle_steps`` steps).
     log_every : int
         Keep every n-th step in the log.
+    contact_body : int, optional
+        A body whose contacts with the robot are watched at every step (not only the logged
+        ones): :attr:`JointLog.peak_contact_force`.
 
     Returns
     -------
@@ -262,6 +269,7 @@ def follow_joint_trajectory(world, robot, model, qs, *, dt=None, kp=400.0, kd=40
     robot.enable_torque_control()
     rows: list = []
     n_total, zero = len(q_des), np.zeros(model.nv)
+    peak = 0.0
     for k in range(n_total + int(max_settle_steps)):
         i = min(k, n_total - 1)
         q, dq = robot.state()
@@ -271,8 +279,10 @@ def follow_joint_trajectory(world, robot, model, qs, *, dt=None, kp=400.0, kd=40
         tau = computed_torques_step(model, data, q, dq, q_des[i], ref_v, ref_a, kp, kd)
         robot.apply_torques_unchecked(tau)
         world.step_once()
+        if contact_body is not None:
+            peak = max(peak, world.normal_force(robot.body, contact_body))
         if k % max(1, int(log_every)) == 0:
             rows.append((k * dt, q, q_des[i], tau))
     steps = k + 1
     t, q_log, qd_log, tau_log = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 4
-    return JointLog(t, q_log, qd_log, tau_log, steps * dt)
+    return JointLog(t, q_log, qd_log, tau_log, steps * dt, peak)
