@@ -741,9 +741,10 @@ def beyond_robustness() -> Part:
     body += (f"\n\n**SIMULATED**, test bench, the paper's reading and HPR plan, {int(ours['trials'].max())} seeds per "
              "point; the plan is fixed and one property of the world changes. " + _source("beyond_robustness.csv",
                                                                                        paper=False))
+    units = dict(zip(ours["sweep"], ours["unit"]))
     found = "; ".join(f"{r.sweep.replace('_', ' ')} "
                       + (f"breaks at {_fmt(r.breaking_point)}" if str(r.broke) == "True"
-                         else f"holds to {_fmt(r.largest_swept)}") for r in breaks.itertuples())
+                         else f"holds to {_fmt(r.largest_swept)}") + f" {units[r.sweep]}" for r in breaks.itertuples())
     return Part(body, "the plan survives machines \"slightly rearranged\" (no number)", found)
 
 

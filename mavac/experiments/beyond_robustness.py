@@ -40,7 +40,7 @@ SWEEPS = {
     "depth_noise": ("depth_noise", "m", 0.0, (0.002, 0.005)),
     "colour_noise": ("colour_noise", "8-bit levels", 0.0, (10.0,)),
     "decoys": ("decoys", "parts", 0, (30,)),
-    "suction_radius": ("suction_radius", "x nominal", 1.0, (0.5, 1.5)),
+    "suction_radius": ("suction_radius", "× nominal", 1.0, (0.5, 1.5)),
 }
 #: The issue's breaking point: cleaning below this share of its unperturbed value.
 BREAK_SHARE = 0.8
@@ -149,9 +149,9 @@ def plot_robustness(summary: pd.DataFrame):
     sweeps = list(dict.fromkeys(summary.sweep))
     cols = min(4, len(sweeps))
     rows = int(np.ceil(len(sweeps) / cols))
-    fig, axes = new_figure(cols, rows, size=(3.4, 2.8))
+    fig, axes = new_figure(cols, rows, size=(3.4, 3.0))
     axes = np.asarray(axes).reshape(-1)
-    for ax, sweep in zip(axes, sweeps):
+    for k, (ax, sweep) in enumerate(zip(axes, sweeps)):
         g = summary[summary.sweep == sweep].sort_values("value")
         err = np.vstack([g.cleaning_pct - g.cleaning_pct_low, g.cleaning_pct_high - g.cleaning_pct])
         ax.errorbar(g.value, g.cleaning_pct, yerr=np.nan_to_num(err), marker="o", capsize=3)
@@ -159,9 +159,11 @@ def plot_robustness(summary: pd.DataFrame):
         ax.axhline(BREAK_SHARE * zero, ls="--", color="grey", label=f"{BREAK_SHARE:.0%} of unperturbed")
         ax.set_title(sweep.replace("_", " "))
         ax.set_xlabel(g.unit.iloc[0])
-        ax.set_ylabel("heaps cleaned (%)")
+        if k % cols == 0:
+            ax.set_ylabel("heaps cleaned (%)")
         ax.set_ylim(0.0, 100.0)
     for ax in axes[len(sweeps):]:
         ax.set_visible(False)
     axes[0].legend(loc="lower left")
+    fig.tight_layout()
     return fig
