@@ -557,9 +557,8 @@ def _cases_issue34():
     """The systematic baseline and notebook 12's online comparison and robustness sweeps."""
     from mavac.cleaning.systematic import run_systematic
     from mavac.experiments.beyond_online import comparison_items, visibility_items
-    from mavac.experiments.beyond_robustness import perturbed_params, robustness_items
+    from mavac.experiments.beyond_robustness import robustness_items, sweep_unit
     from mavac.geometry.machines import load_machine
-    from mavac.params import OnlineParams
 
     def sweep(plan, **kw):
         return run_systematic(load_machine("test_bench"), plan, **kw)
@@ -575,8 +574,8 @@ def _cases_issue34():
         refuse("wrong", "visibility_items-seeds-5", lambda: visibility_items(seeds=5), TypeError, "seeds"),
         refuse("wrong", "robustness_items-sweeps-unknown", lambda: robustness_items(sweeps=("wind",)), ValueError,
                "sweeps"),
-        refuse("wrong", "perturbed_params-sweep-unknown", lambda: perturbed_params(OnlineParams(), "wind", 1.0),
-               ValueError, "sweep"),
+        refuse("wrong", "sweep_unit-sweep-unknown", lambda: sweep_unit("test_bench", 1, "wind", 1.0), ValueError,
+               "sweep"),
     ]
 
 
