@@ -783,6 +783,35 @@ def beyond_robustness() -> Part:
     return Part(body, "the plan survives machines \"slightly rearranged\" (no number)", found)
 
 
+def beyond_improved() -> Part:
+    """MAVAC's limits lifted one at a time and together: heaps cleaned per step and scene."""
+    from .experiments.beyond_improved import GOAL_PCT
+
+    cols = ("step", "scene", "trials", "C", "guards", "cleaning_pct", "cleaning_pct_low", "cleaning_pct_high",
+            "sim_time_s", "hidden", "no approach found", "vacuum missed", "meets_goal")
+    ours = _read("beyond_improved.csv", cols)
+    rows = [[r.step.replace("_", " "), r.scene.replace("_", " "), _fmt(r.C), _fmt(r.guards),
+             f"{_fmt(r.cleaning_pct)} [{_fmt(r.cleaning_pct_low)}, {_fmt(r.cleaning_pct_high)}]", _fmt(r.sim_time_s),
+             _fmt(r.hidden), _fmt(r["no approach found"]), _fmt(r["vacuum missed"])]
+            for _, r in ours.iterrows()]
+    body = _table(["step", "scene", "plan C", "guards", "heaps cleaned (%) [95 % interval]", "simulated time (s)",
+                   "hidden", "no approach found", "vacuum missed"], rows)
+    body += (f"\n\n**SIMULATED**, the paper's reading, {int(ours['trials'].min())} seeds per scene (`both` pools the "
+             "two scenes' trials); the last three columns are miss causes, mean heaps per trial. The extended suction "
+             "tube is not yet run. " + _source("beyond_improved.csv", paper=False))
+    both = ours[ours["scene"] == "both"].set_index("step")
+    best = both["cleaning_pct"].idxmax()
+    goal = ours[ours["step"] == best]["meets_goal"].astype(str).iloc[0] == "True"
+    found = (f"heaps cleaned (both scenes) paper step {_fmt(both.loc['paper', 'cleaning_pct'])} %, "
+             + ", ".join(f"{s.replace('_', ' ')} {_fmt(both.loc[s, 'cleaning_pct'])} %" for s in both.index
+                         if s != "paper")
+             + f"; best ({best.replace('_', ' ')}) {'meets' if goal else 'misses'} the {GOAL_PCT:.0f} % goal on "
+             + ", ".join(f"{r.scene.replace('_', ' ')} {_fmt(r.cleaning_pct)} %"
+                         for r in ours[(ours['step'] == best) & (ours['scene'] != 'both')].itertuples())
+             + f" at {_fmt(both.loc[best, 'sim_time_s'] / both.loc['paper', 'sim_time_s'])}x the paper step's time")
+    return Part(body, "84 % of heaps; the tool too large inside the milling machine's box (no number)", found)
+
+
 # (paper, title, anchor, function): the order of docs/results.md and of the README's table
 SECTIONS = (
     ("MAVAC", "Machines", "mavac-machines", mavac_machines),
@@ -808,6 +837,7 @@ SECTIONS = (
      beyond_visibility_online),
     ("Beyond", "MAVAC: adaptive against systematic cleaning (SIMULATED)", "beyond-systematic", beyond_systematic),
     ("Beyond", "MAVAC: where the offline plan breaks (SIMULATED)", "beyond-robustness", beyond_robustness),
+    ("Beyond", "MAVAC with its limits lifted (SIMULATED)", "beyond-improved", beyond_improved),
 )
 
 

@@ -83,7 +83,8 @@ OUTPUTS: dict[str, tuple[str, ...]] = {
            "results/beyond_visibility_offline.csv", "results/beyond_adaptive_vs_systematic_runs.csv",
            "results/beyond_adaptive_vs_systematic.csv", "results/beyond_visibility_online_runs.csv",
            "results/beyond_visibility_online.csv", "results/beyond_robustness_runs.csv",
-           "results/beyond_robustness.csv", "results/beyond_robustness_breaking.csv"),
+           "results/beyond_robustness.csv", "results/beyond_robustness_breaking.csv",
+           "results/beyond_improved_runs.csv", "results/beyond_improved.csv"),
 }
 
 #: The runner's records of a run (not written by a notebook).

@@ -557,6 +557,7 @@ def _cases_issue34():
     """The systematic baseline and notebook 12's online comparison and robustness sweeps."""
     from mavac.cleaning.systematic import run_systematic
     from mavac.experiments.beyond_online import comparison_items, visibility_items
+    from mavac.experiments.beyond_improved import improved_items, improved_unit
     from mavac.experiments.beyond_robustness import robustness_items, sweep_unit
     from mavac.geometry.machines import load_machine
 
@@ -576,6 +577,9 @@ def _cases_issue34():
                "sweeps"),
         refuse("wrong", "sweep_unit-sweep-unknown", lambda: sweep_unit("test_bench", 1, "wind", 1.0), ValueError,
                "sweep"),
+        refuse("wrong", "improved_unit-step-unknown", lambda: improved_unit("test_bench", 1, "long_tube"), ValueError,
+               "step"),
+        refuse("wrong", "improved_items-scenes-str", lambda: improved_items(scenes="test_bench"), TypeError, "scenes"),
     ]
 
 

@@ -2,19 +2,14 @@
 Part 1's, and the summary and breaking points follow from the runs."""
 
 import dataclasses
-import warnings
 
 import numpy as np
 import pandas as pd
 import pytest
-import trimesh
 from scipy import stats
 
 from mavac.experiments import beyond_online as BO
 from mavac.experiments import beyond_robustness as BR
-from mavac.experiments.mavac_offline import fast_params
-from mavac.geometry.machines import machine_from_mesh
-from mavac.inspection.inspection_plan import plan_inspection
 from mavac.params import DustParams, OnlineParams, PerturbationParams
 
 
@@ -37,12 +32,8 @@ def test_each_sweep_point_sets_one_field_and_the_unperturbed_trial_is_part_1s():
 
 
 @pytest.fixture
-def on_the_box(monkeypatch):
-    machine = machine_from_mesh(trimesh.creation.box(bounds=[[-0.4, -0.25, 0.0], [0.4, 0.25, 0.6]]), name="box")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        plan = plan_inspection(machine, params=fast_params())
-    plan = dataclasses.replace(plan, pose_set=plan.pose_set.head(3))
+def on_the_box(monkeypatch, box_plan):
+    machine, plan = box_plan
     monkeypatch.setattr(BO, "load_machine", lambda scene: machine)
     monkeypatch.setattr(BO, "offline_plan", lambda scene, reading, *, offline, fast: plan)
     monkeypatch.setattr(BO, "online_params", lambda reading, *, fast: OnlineParams(dust=DustParams(spacing=0.1)))

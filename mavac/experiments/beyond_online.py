@@ -80,19 +80,27 @@ def unit_params(unit: tuple) -> OnlineParams:
 
 def unit_run(unit: tuple) -> dict:
     """Run one unit (module level: picklable for any joblib backend). Returns what every part
-    reads from it: the result's ``row``, ``times``, ``heaps``, ``cleaned``, ``seen_by`` (None for
-    the baseline) and ``motion`` (tool path, m, and joint travel, rad, over the replay)."""
+    reads from it: the result's ``row``, ``times``, ``heaps``, ``cleaned``, ``seen_by`` and
+    ``causes`` (miss cause counts; both None for the baseline) and ``motion`` (tool path, m, and
+    joint travel, rad, over the replay). Units: :func:`adaptive_unit`, :func:`systematic_unit`
+    and :func:`mavac.experiments.beyond_improved.improved_unit`."""
     scene, seed, fast = unit[1], unit[-2], unit[-1]
     machine = load_machine(scene)
-    if unit[0] == "adaptive":
+    if unit[0] == "improved":
+        from .beyond_improved import improved_params, improved_plan  # it builds on this module
+
+        result = run_trial(machine, improved_plan(scene, unit[2], fast=fast),
+                           params=improved_params(unit[2], fast=fast), seed=seed)
+    elif unit[0] == "adaptive":
         plan = offline_plan(scene, "paper", offline=unit[2], fast=fast)
         result = run_trial(machine, plan, params=unit_params(unit), seed=seed)
     else:
         plan = offline_plan(scene, "paper", offline="hpr", fast=fast)
         result = run_systematic(machine, plan, params=unit_params(unit), seed=seed)
     motion = motion_totals(result.replay, ur10_mobile()) if result.replay is not None else (0.0, 0.0)
+    causes = result.miss_counts() if hasattr(result, "miss_counts") else None
     return dict(row=result.row(), times=result.times, heaps=result.heaps, cleaned=result.cleaned,
-                seen_by=getattr(result, "seen_by", None), motion=motion)
+                seen_by=getattr(result, "seen_by", None), causes=causes, motion=motion)
 
 
 def run_units(units, *, n_jobs=None, desc: str = "online runs") -> dict:
