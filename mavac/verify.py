@@ -84,7 +84,7 @@ OUTPUTS: dict[str, tuple[str, ...]] = {
            "results/beyond_adaptive_vs_systematic.csv", "results/beyond_visibility_online_runs.csv",
            "results/beyond_visibility_online.csv", "results/beyond_robustness_runs.csv",
            "results/beyond_robustness.csv", "results/beyond_robustness_breaking.csv",
-           "results/beyond_improved_runs.csv", "results/beyond_improved.csv"),
+           "results/beyond_improved_runs.csv", "results/beyond_improved.csv", "results/beyond_improved_tube.csv"),
 }
 
 #: The runner's records of a run (not written by a notebook).

@@ -577,7 +577,7 @@ def _cases_issue34():
                "sweeps"),
         refuse("wrong", "sweep_unit-sweep-unknown", lambda: sweep_unit("test_bench", 1, "wind", 1.0), ValueError,
                "sweep"),
-        refuse("wrong", "improved_unit-step-unknown", lambda: improved_unit("test_bench", 1, "long_tube"), ValueError,
+        refuse("wrong", "improved_unit-step-unknown", lambda: improved_unit("test_bench", 1, "teleport"), ValueError,
                "step"),
         refuse("wrong", "improved_items-scenes-str", lambda: improved_items(scenes="test_bench"), TypeError, "scenes"),
     ]

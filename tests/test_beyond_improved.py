@@ -14,8 +14,12 @@ from mavac.cleaning.misses import CAUSES
 from mavac.experiments import beyond_improved as BI
 from mavac.experiments import beyond_online as BO
 from mavac.experiments.mavac_offline import fast_params
+from mavac.geometry.transforms import se2_to_matrix
 from mavac.inspection.inspection_plan import plan_inspection
+from mavac.geometry.machines import MILL_BACK, MILL_BODY_SIZE, MILL_SLAB
 from mavac.params import CameraParams, DetectionParams, DustParams, OnlineParams
+from mavac.robots.kinematics import fk
+from mavac.robots.models import TOOL_SPHERE_RADIUS, TOOL_TUBE_LENGTH, ur10_mobile
 from mavac.vision.camera import fov_mask
 
 
@@ -60,6 +64,44 @@ def test_concave_approach_widens_eq5_only():
     assert BI.improved_params(("concave_approach",), fast=True).approach == BI.concave_approach_params(
         BI.online_params("paper", fast=True).approach)
     assert BI.improved_params(("raycast", "detection_guards"), fast=True) == BI.online_params("paper", fast=True)
+    reach = BI.online_params("paper", fast=True).detection.reach
+    assert BI.improved_params(("long_tube",), fast=True).detection.reach == pytest.approx(
+        reach + BI.enclosure_tube_length() - TOOL_TUBE_LENGTH)
+
+
+def test_the_long_tube_reaches_the_enclosures_far_bottom_with_the_camera_outside():
+    L, front = BI.enclosure_tube_length(), BI.camera_front(ur10_mobile())
+    diagonal = np.hypot(MILL_BODY_SIZE[1] - MILL_BACK - TOOL_SPHERE_RADIUS,
+                        MILL_BODY_SIZE[2] - 2 * MILL_SLAB - TOOL_SPHERE_RADIUS)
+    assert L - 0.01 < front + diagonal <= L and L > TOOL_TUBE_LENGTH
+    assert BI.improved_robot(("long_tube",)).name != ur10_mobile().name == BI.improved_robot(("raycast",)).name
+
+
+def _tip_to_target(plan, robot) -> np.ndarray:
+    guard = plan.pose_set.kind == "guard"
+    rows, targets = plan.pose_set.poses[guard], plan.pose_set.target[guard]
+    tips = [se2_to_matrix(*r[:3]) @ fk(robot, r[3:], robot.tool_frame) for r in rows]
+    return np.linalg.norm(np.array([t[:3, 3] for t in tips]) - plan.points[targets], axis=1)
+
+
+def test_long_tube_guards_stand_back_so_the_sphere_keeps_the_papers_distance_to_the_target(box_plan):
+    machine, _ = box_plan
+    long = ur10_mobile(tube_length=BI.enclosure_tube_length())
+    params = BI.long_tube_inspection_params(fast_params(), BI.enclosure_tube_length())
+    assert params.camera.L_d == pytest.approx(fast_params().camera.L_d + BI.enclosure_tube_length() - TOOL_TUBE_LENGTH)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        paper = plan_inspection(machine, params=fast_params())
+        tube = plan_inspection(machine, robot=long, params=params)
+    assert tube.robot_name == long.name and np.count_nonzero(tube.pose_set.kind == "guard")
+    assert np.median(_tip_to_target(tube, long)) == pytest.approx(np.median(_tip_to_target(paper, ur10_mobile())),
+                                                                   abs=0.01)
+
+
+def test_a_longer_tube_hides_more_of_the_image():
+    cam, det = CameraParams(), DetectionParams()
+    short, long = (BI.tool_blind_spot(ur10_mobile(tube_length=L), cam, det) for L in (0.3, BI.enclosure_tube_length()))
+    assert 0.0 < short < long < 0.5
 
 
 def test_the_paper_and_raycast_steps_are_parts_1_and_3s_trials_and_every_step_round_trips():
@@ -68,9 +110,9 @@ def test_the_paper_and_raycast_steps_are_parts_1_and_3s_trials_and_every_step_ro
     assert items[0] == BO.comparison_items(scenes=("test_bench",), densities=(1.0,), seeds=(1,), fast=True)[0]
     assert items[1] in BO.visibility_items(scenes=("test_bench",), seeds=(1,), fast=True)
     assert [BI.step_of(u) for u in items] == list(BI.STEPS)
-    assert items[-1] == ("improved", "test_bench", BI.LIMITS, 1, True)
+    assert items[-1] == ("improved", "test_bench", BI.LIMITS, 1, True) and len(BI.LIMITS) == 4
     with pytest.raises(ValueError, match="step must be one of"):
-        BI.improved_unit("test_bench", 1, "long_tube")
+        BI.improved_unit("test_bench", 1, "teleport")
 
 
 @pytest.fixture

@@ -91,6 +91,23 @@ def test_ur10_tool_and_camera_frames(ur10):
     assert {"tool_tube", "tool_sphere", "camera_body", "mir200_base"} <= names
 
 
+def test_a_longer_tube_moves_only_the_tip_and_is_another_robot(ur10):
+    import pickle
+
+    long = ur10_mobile(tube_length=0.55)
+    q = np.random.default_rng(1).uniform(-np.pi, np.pi, 6)
+    flange = _frame_pose(long, q, "tool0")
+    np.testing.assert_allclose(_frame_pose(long, q, "tool_tip")[:3, 3], flange[:3, 3] + 0.55 * flange[:3, 2], atol=1e-12)
+    np.testing.assert_allclose(_frame_pose(long, q, "camera"), _frame_pose(ur10, q, "camera"), atol=1e-12)
+    assert long.name == "ur10_mobile_tube550mm" and ur10_mobile(tube_length=TOOL_TUBE_LENGTH).name == ur10.name
+    tube = {g.name: g for g in long.collision_model.geometryObjects}["tool_tube"]
+    assert tube.geometry.halfLength == pytest.approx(0.275)
+    back = pickle.loads(pickle.dumps(long))
+    assert back.name == long.name and back.model.inertias[6].mass == pytest.approx(long.model.inertias[6].mass)
+    with pytest.raises(ValueError, match=r"tube_length must be in \[0.1, 1.3\]"):
+        ur10_mobile(tube_length=2.0)
+
+
 def test_puma_matches_published_dh(puma):
     rng = np.random.default_rng(1)
     for q in rng.uniform(puma.q_lower, puma.q_upper, (50, 6)):

@@ -1,4 +1,4 @@
-"""Notebook 12, Part 4 (issue 34): a MAVAC that cleans what the paper's could not.
+"""Notebook 12, Part 5 (issue 34's fourth part): a MAVAC that cleans what the paper's could not.
 
 The paper names its limits: HPR misclassifies what the camera sees, and the tool is too large
 for the path planner inside the milling machine's box. Our Table 2 trials (notebook 05,
@@ -15,13 +15,15 @@ plan, notebook 05), on the same scenes, seeds and dust, and the last lifts them 
   (:func:`detection_guard_params`): at every spot the greedy keeps adding guards while one sees
   an element no guard sees yet, and every element of a guard's pyramid is one where a heap spans
   at least the detector's blob threshold;
+* ``long_tube``: the paper's own suggestion, "extending the suction tube could allow access to
+  this area": a tube long enough to reach the back of the milling machine's enclosure with the
+  camera outside (:func:`enclosure_tube_length`). The camera stays by the flange, so the guards
+  stand back by the extension (:func:`long_tube_inspection_params`), and the tube fills more of
+  the image (:func:`tool_blind_spot`, the blind spot it costs);
 * ``concave_approach``: approach planning that reaches concavities
   (:func:`concave_approach_params`): eq. 5's orientations anywhere within 90 deg of the guard's
   tool axis instead of 20 deg, with four times the samples;
-* ``combined``: all three.
-
-The extended suction tube (the paper's own suggestion) is not a step yet: it changes the robot
-model the offline plan and the simulation share.
+* ``combined``: all four.
 
 Every trial goes through :func:`mavac.experiments.beyond_online.run_units`; the ``paper`` and
 ``raycast`` steps are the same units as Parts 1 and 3 (shared, run once).
@@ -37,8 +39,10 @@ import pandas as pd
 
 from ..cache import verified_cache
 from ..cleaning.misses import CAUSES
-from ..geometry.machines import load_machine
+from ..cleaning.trial import FAR, NEAR
+from ..geometry.machines import MILL_BACK, MILL_BODY_SIZE, MILL_SLAB, load_machine
 from ..params import ApproachParams, CameraParams, DetectionParams, DustParams, InspectionParams, OnlineParams
+from ..robots.models import KINECT_SIZE, TOOL_SPHERE_RADIUS, TOOL_TUBE_LENGTH, RobotModel, ur10_mobile
 from ..validate import check_sequence
 from ..vision.camera import fov_pyramid_corners
 from ..viz.plots import new_figure
@@ -46,10 +50,9 @@ from .beyond_online import adaptive_unit, mean_ci, run_units
 from .mavac_online import FAST_POSES, SCENES, geometry_digest, inspection_params, online_params, paper_scene_means
 
 #: the limits lifted, each one change to the paper's trial
-LIMITS = ("raycast", "detection_guards", "concave_approach")
-#: Part 4's steps and the limits each lifts: the paper's trial, each limit alone, then all
-STEPS = {"paper": (), "raycast": ("raycast",), "detection_guards": ("detection_guards",),
-         "concave_approach": ("concave_approach",), "combined": LIMITS}
+LIMITS = ("raycast", "detection_guards", "long_tube", "concave_approach")
+#: Part 5's steps and the limits each lifts: the paper's trial, each limit alone, then all
+STEPS = {"paper": (), **{limit: (limit,) for limit in LIMITS}, "combined": LIMITS}
 #: Ours: eq. 5's tilt bound for the concave approach. The tool is a sphere on a straight tube,
 #: so any axis that points into the half-space the guard saw the node from can vacuum it: 90 deg
 #: about the guard's tool axis, instead of the authors' 20 deg.
@@ -106,6 +109,64 @@ def concave_approach_params(approach: ApproachParams) -> ApproachParams:
     return dataclasses.replace(approach, alpha=CONCAVE_ALPHA, n_orientations=CONCAVE_ORIENTATIONS)
 
 
+def camera_front(robot: RobotModel) -> float:
+    """Distance (m) along the tool axis from the flange to the front of the camera body."""
+    m = robot.model
+    flange_T_camera = m.frames[m.getFrameId("tool0")].placement.inverse() * m.frames[m.getFrameId("camera")].placement
+    return float(flange_T_camera.translation[2] + KINECT_SIZE[0] / 2)
+
+
+def enclosure_tube_length(robot: RobotModel | None = None) -> float:
+    """Tube length (m, rounded up to 1 cm) whose sphere reaches the far bottom of the milling
+    machine's enclosure (one sphere radius off its back wall and floor) from the top edge of its
+    open front, with the camera body still outside: the camera front (:func:`camera_front`) plus
+    that diagonal. The enclosure is our SRM-20 stand-in's (:mod:`mavac.geometry.machines`)."""
+    robot = ur10_mobile() if robot is None else robot
+    depth = MILL_BODY_SIZE[1] - MILL_BACK - TOOL_SPHERE_RADIUS
+    height = MILL_BODY_SIZE[2] - 2 * MILL_SLAB - TOOL_SPHERE_RADIUS
+    return math.ceil(100.0 * (camera_front(robot) + math.hypot(depth, height))) / 100.0
+
+
+def long_tube_inspection_params(params: InspectionParams, tube_length: float) -> InspectionParams:
+    """The offline parameters for a tube ``tube_length`` m long: the guard stand-off and the FOV
+    pyramid's depth cut ``L_d`` (the paper places guards at it) grow by the extension, so the
+    sphere stays as far from a guard's target as the paper's tool kept it."""
+    camera = dataclasses.replace(params.camera, L_d=params.camera.L_d + tube_length - TOOL_TUBE_LENGTH)
+    standoff = params.guard.standoff
+    guard = dataclasses.replace(params.guard, standoff=None if standoff is None else
+                                standoff + tube_length - TOOL_TUBE_LENGTH)
+    return dataclasses.replace(params, camera=camera, guard=guard)
+
+
+def tool_blind_spot(robot: RobotModel, camera: CameraParams, detection: DetectionParams) -> float:
+    """Share of the online camera's image that the robot's own tool hides: the robot alone at
+    ``q_home`` in pybullet, one render from its camera (the online loop's renderer, resolution,
+    vertical FOV and clipping planes: the camera's own body is nearer than the near plane),
+    pixels whose segmentation is the robot."""
+    from ..sim.render import mavac_T_opencv, render_rgbd
+    from ..sim.urdf import robot_urdf
+    from ..sim.world import SimWorld
+
+    names = [robot.model.names[j] for j in range(1, robot.model.njoints)]
+    with SimWorld() as world:
+        sim = world.add_robot(robot_urdf(robot), joint_names=names)
+        sim.reset_q(robot.q_home)
+        world_T_camera = sim.world_T_link(robot.camera_frame) @ mavac_T_opencv()
+        _, _, seg = render_rgbd(world.client, world_T_camera, width=detection.width, height=detection.height,
+                                fov_y_deg=math.degrees(2.0 * camera.theta_b), near=NEAR, far=FAR)
+        return float(np.mean(seg == sim.body))
+
+
+def blind_spot_table(camera: CameraParams, detection: DetectionParams) -> pd.DataFrame:
+    """The paper's tube and the long one: length (m), guard stand-off (m, the paper's ``L_d``
+    plus the extension) and the share of the image the tool hides (%, :func:`tool_blind_spot`)."""
+    rows = []
+    for name, L in (("paper", TOOL_TUBE_LENGTH), ("long_tube", enclosure_tube_length())):
+        rows.append(dict(tube=name, tube_length_m=L, guard_standoff_m=camera.L_d + L - TOOL_TUBE_LENGTH,
+                         blind_spot_pct=100.0 * tool_blind_spot(ur10_mobile(tube_length=L), camera, detection)))
+    return pd.DataFrame(rows).round(3)
+
+
 def _check_step(step) -> tuple:
     if step not in STEPS:
         raise ValueError(f"step must be one of {list(STEPS)}, got {step!r}")
@@ -129,28 +190,47 @@ def step_of(unit: tuple) -> str:
     return next(step for step, lifted in STEPS.items() if lifted == limits)
 
 
-def _scene_plan(scene: str, params: InspectionParams, geometry_sha256: str):
-    """Offline plan of one of the package's scenes (module level: joblib caches it; the mesh's
-    digest keys a change of geometry)."""
+def improved_robot(limits: tuple) -> RobotModel:
+    """The robot of a step's ``limits``: :func:`mavac.robots.models.ur10_mobile`, with the tube of
+    :func:`enclosure_tube_length` if ``long_tube`` is lifted."""
+    return ur10_mobile(tube_length=enclosure_tube_length()) if "long_tube" in limits else ur10_mobile()
+
+
+def _scene_plan(scene: str, params: InspectionParams, tube_length: float, geometry_sha256: str):
+    """Offline plan of one of the package's scenes for the robot with that tube (module level:
+    joblib caches it; the mesh's digest keys a change of geometry)."""
     from ..inspection.inspection_plan import plan_inspection
 
-    return plan_inspection(load_machine(scene), params=params)
+    return plan_inspection(load_machine(scene), robot=ur10_mobile(tube_length=tube_length), params=params)
+
+
+def improved_inspection_params(limits: tuple, *, fast: bool = False) -> InspectionParams:
+    """The offline parameters of a step's ``limits`` (the paper's reading, fast mode's sizes)."""
+    params = inspection_params("paper", offline="raycast" if "raycast" in limits else "hpr", fast=fast)
+    if "long_tube" in limits:
+        params = long_tube_inspection_params(params, enclosure_tube_length())
+    if "detection_guards" in limits:
+        params = detection_guard_params(params, online_params("paper", fast=fast))
+    return params
 
 
 def improved_plan(scene: str, limits: tuple, *, fast: bool = False):
     """The offline plan of a step's ``limits`` (cached on disk; fast mode: its first
     :data:`mavac.experiments.mavac_online.FAST_POSES` poses, as notebook 05)."""
-    params = inspection_params("paper", offline="raycast" if "raycast" in limits else "hpr", fast=fast)
-    if "detection_guards" in limits:
-        params = detection_guard_params(params, online_params("paper", fast=fast))
-    plan = verified_cache(_scene_plan)(scene, params, geometry_digest(scene))
+    tube = enclosure_tube_length() if "long_tube" in limits else TOOL_TUBE_LENGTH
+    plan = verified_cache(_scene_plan)(scene, improved_inspection_params(limits, fast=fast), tube,
+                                       geometry_digest(scene))
     return dataclasses.replace(plan, pose_set=plan.pose_set.head(FAST_POSES)) if fast else plan
 
 
 def improved_params(limits: tuple, *, fast: bool = False) -> OnlineParams:
     """The online parameters of a step's ``limits``: the paper's reading, with the concave
-    approach if lifted."""
+    approach if lifted; with the long tube, the reach filter grows by the extension (the
+    reading's reach is the arm's plus the tube)."""
     params = online_params("paper", fast=fast)
+    if "long_tube" in limits:
+        reach = params.detection.reach + enclosure_tube_length() - TOOL_TUBE_LENGTH
+        params = dataclasses.replace(params, detection=dataclasses.replace(params.detection, reach=reach))
     if "concave_approach" in limits:
         params = dataclasses.replace(params, approach=concave_approach_params(params.approach))
     return params

@@ -86,10 +86,12 @@ def unit_run(unit: tuple) -> dict:
     and :func:`mavac.experiments.beyond_improved.improved_unit`."""
     scene, seed, fast = unit[1], unit[-2], unit[-1]
     machine = load_machine(scene)
+    robot = ur10_mobile()
     if unit[0] == "improved":
-        from .beyond_improved import improved_params, improved_plan  # it builds on this module
+        from .beyond_improved import improved_params, improved_plan, improved_robot  # it builds on this module
 
-        result = run_trial(machine, improved_plan(scene, unit[2], fast=fast),
+        robot = improved_robot(unit[2])
+        result = run_trial(machine, improved_plan(scene, unit[2], fast=fast), robot=robot,
                            params=improved_params(unit[2], fast=fast), seed=seed)
     elif unit[0] == "adaptive":
         plan = offline_plan(scene, "paper", offline=unit[2], fast=fast)
@@ -97,7 +99,7 @@ def unit_run(unit: tuple) -> dict:
     else:
         plan = offline_plan(scene, "paper", offline="hpr", fast=fast)
         result = run_systematic(machine, plan, params=unit_params(unit), seed=seed)
-    motion = motion_totals(result.replay, ur10_mobile()) if result.replay is not None else (0.0, 0.0)
+    motion = motion_totals(result.replay, robot) if result.replay is not None else (0.0, 0.0)
     causes = result.miss_counts() if hasattr(result, "miss_counts") else None
     return dict(row=result.row(), times=result.times, heaps=result.heaps, cleaned=result.cleaned,
                 seen_by=getattr(result, "seen_by", None), causes=causes, motion=motion)

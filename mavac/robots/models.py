@@ -29,7 +29,7 @@ import pinocchio as pin
 from ..geometry.transforms import se2_to_matrix  # noqa: F401  (re-exported: world_T_base of a spot)
 from ..config import cache_dir
 from ..io import write_text
-from ..validate import check_nonnegative, check_positive
+from ..validate import check_nonnegative, check_positive, check_range
 from .kinematics import estimate_manipulability_max
 
 # MiR200 footprint and deck height (MiR200 datasheet: 890 x 580 mm, 352 mm high); MAVAC,
@@ -37,6 +37,9 @@ from .kinematics import estimate_manipulability_max
 MIR200_SIZE = (0.89, 0.58, 0.35)
 # Vacuum tool of MAVAC Fig. 5: a long tube ending in a perforated sphere (dimensions ours).
 TOOL_TUBE_LENGTH = 0.40
+#: tube lengths a user may build, m (ours: the sphere ahead of the camera body, at most the
+#: UR10's 1.3 m reach)
+TOOL_TUBE_RANGE = (0.1, 1.3)
 TOOL_TUBE_RADIUS = 0.02
 TOOL_SPHERE_RADIUS = 0.025
 # Azure Kinect DK body 103 x 39 x 126 mm (Microsoft hardware specification), mounted on top
@@ -184,9 +187,10 @@ def _rebuild(builder: str, kwargs: dict, q_home: np.ndarray) -> RobotModel:
     return robot
 
 
-def _add_tool_inertia(model, joint: int, joint_T_flange: pin.SE3, joint_T_camera: pin.SE3) -> None:
-    """Tube (thin rod along the tool z), sphere and Kinect (box) as inertia on the wrist."""
-    L, r = TOOL_TUBE_LENGTH, TOOL_TUBE_RADIUS
+def _add_tool_inertia(model, joint: int, joint_T_flange: pin.SE3, joint_T_camera: pin.SE3, L: float) -> None:
+    """Tube of length ``L`` (m; thin rod along the tool z), sphere and Kinect (box) as inertia on
+    the wrist."""
+    r = TOOL_TUBE_RADIUS
     rod = np.diag([TOOL_TUBE_MASS * (3 * r**2 + L**2) / 12] * 2 + [TOOL_TUBE_MASS * r**2 / 2])
     model.appendBodyToJoint(joint, pin.Inertia(TOOL_TUBE_MASS, np.array([0.0, 0.0, L / 2]), rod), joint_T_flange)
     sphere = pin.Inertia.FromSphere(TOOL_SPHERE_MASS, TOOL_SPHERE_RADIUS)
@@ -202,7 +206,7 @@ def _ur10_description():
     return example_robot_data.load("ur10")
 
 
-def ur10_mobile() -> RobotModel:
+def ur10_mobile(*, tube_length: float = TOOL_TUBE_LENGTH) -> RobotModel:
     """UR10 (example-robot-data) on a MiR200-sized SE(2) base, with vacuum tool and camera.
 
     Base frame: on the floor under the centre of the platform, x forward (long side), z up.
@@ -210,7 +214,15 @@ def ur10_mobile() -> RobotModel:
     Frames ``tool_tip`` (centre of the tool sphere, z along the tube) and ``camera``
     (x = optical axis = tool z) are attached to the flange ``tool0``.
     Joint limits are those of example-robot-data's ``ur10_robot.urdf`` (+-2 pi, elbow +-pi).
+
+    Parameters
+    ----------
+    tube_length : float, metres
+        Flange to the tool sphere's centre, in :data:`TOOL_TUBE_RANGE` (default
+        :data:`TOOL_TUBE_LENGTH`); the camera stays where it is, next to the flange. Another
+        length is another robot, named ``ur10_mobile_tube<mm>mm``.
     """
+    L = check_range("tube_length", tube_length, *TOOL_TUBE_RANGE)
     ur = _ur10_description()
     root = pin.Model()
     root.name = "ur10_mobile"
@@ -238,16 +250,16 @@ def ur10_mobile() -> RobotModel:
     joint_T_flange = flange.placement
     tool_grey = (0.75, 0.75, 0.8, 1.0)
     tube = _geometry(
-        "tool_tube", joint, flange_id, coal.Cylinder(TOOL_TUBE_RADIUS, TOOL_TUBE_LENGTH),
-        joint_T_flange * _translation(z=TOOL_TUBE_LENGTH / 2), tool_grey,
+        "tool_tube", joint, flange_id, coal.Cylinder(TOOL_TUBE_RADIUS, L), joint_T_flange * _translation(z=L / 2),
+        tool_grey,
     )
     sphere = _geometry(
         "tool_sphere", joint, flange_id, coal.Sphere(TOOL_SPHERE_RADIUS),
-        joint_T_flange * _translation(z=TOOL_TUBE_LENGTH), tool_grey,
+        joint_T_flange * _translation(z=L), tool_grey,
     )
     _add_to_both(collision, visual, tube)
     _add_to_both(collision, visual, sphere)
-    joint_T_tip = joint_T_flange * _translation(z=TOOL_TUBE_LENGTH)
+    joint_T_tip = joint_T_flange * _translation(z=L)
     model.addFrame(pin.Frame("tool_tip", joint, flange_id, joint_T_tip, pin.FrameType.OP_FRAME))
     # Camera on top of the tube (flange +x side), near the flange; camera x = tool z,
     # camera y = tool y, camera z = -tool x (right-handed).
@@ -258,13 +270,14 @@ def ur10_mobile() -> RobotModel:
     model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_camera, pin.FrameType.OP_FRAME))
     camera_body = _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_camera, (0.1, 0.1, 0.1, 1.0))
     _add_to_both(collision, visual, camera_body)
-    _add_tool_inertia(model, joint, joint_T_flange, joint_T_camera)
+    _add_tool_inertia(model, joint, joint_T_flange, joint_T_camera, L)
 
     # Elbow up, tool tip ~(1.0, 0, 0.8) m pointing forward and 60 deg down, wrist away from
     # q5 = 0 (wrist singularity); a high-maneuverability IK solution for that target.
     q_home = np.array([-0.22, -1.46, 1.31, -1.94, -1.46, 0.0])
     robot = RobotModel(
-        name="ur10_mobile",
+        # another tube is another robot: its plans do not run on this one (run_trial checks names)
+        name="ur10_mobile" if L == TOOL_TUBE_LENGTH else f"ur10_mobile_tube{round(1000 * L)}mm",
         model=model,
         collision_model=collision,
         visual_model=visual,
@@ -273,11 +286,11 @@ def ur10_mobile() -> RobotModel:
         q_home=q_home,
         notes=(
             "Stand-in for MAVAC's Doosan M1013 on a MiR200: UR10 (example-robot-data, ur10_robot.urdf) "
-            "at the centre of a 0.89 x 0.58 x 0.35 m box; vacuum tool = 0.40 m tube (r 2 cm) + "
+            f"at the centre of a 0.89 x 0.58 x 0.35 m box; vacuum tool = {L:.2f} m tube (r 2 cm) + "
             "5 cm sphere on tool0; Azure Kinect on top of the tube, optical axis = camera x = tool z."
         ),
     )
-    return _finish(robot, "ur10_mobile", {})
+    return _finish(robot, "ur10_mobile", {} if L == TOOL_TUBE_LENGTH else {"tube_length": L})
 
 
 def _dh_placement(a: float, d: float, alpha: float) -> pin.SE3:
