@@ -791,7 +791,7 @@ def _tube_blind_spot() -> str:
 
 
 def beyond_improved() -> Part:
-    """MAVAC's limits lifted one at a time and together: heaps cleaned per step and scene."""
+    """MAVAC's limits lifted one after another: heaps cleaned per step and scene."""
     from .experiments.beyond_improved import GOAL_PCT
 
     cols = ("step", "scene", "trials", "C", "guards", "cleaning_pct", "cleaning_pct_low", "cleaning_pct_high",

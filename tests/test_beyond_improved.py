@@ -61,7 +61,7 @@ def test_concave_approach_widens_eq5_only():
     c = BI.concave_approach_params(a)
     assert (c.alpha, c.n_orientations) == (BI.CONCAVE_ALPHA, BI.CONCAVE_ORIENTATIONS)
     assert dataclasses.replace(c, alpha=a.alpha, n_orientations=a.n_orientations) == a
-    assert BI.improved_params(("concave_approach",), fast=True).approach == BI.concave_approach_params(
+    assert BI.improved_params(BI.STEPS["concave_approach"], fast=True).approach == BI.concave_approach_params(
         BI.online_params("paper", fast=True).approach)
     assert BI.improved_params(("raycast", "detection_guards"), fast=True) == BI.online_params("paper", fast=True)
     reach = BI.online_params("paper", fast=True).detection.reach
@@ -111,6 +111,8 @@ def test_the_paper_and_raycast_steps_are_parts_1_and_3s_trials_and_every_step_ro
     assert items[1] in BO.visibility_items(scenes=("test_bench",), seeds=(1,), fast=True)
     assert [BI.step_of(u) for u in items] == list(BI.STEPS)
     assert items[-1] == ("improved", "test_bench", BI.LIMITS, 1, True) and len(BI.LIMITS) == 4
+    ladder = list(BI.STEPS.values())
+    assert all(after[:-1] == before for before, after in zip(ladder, ladder[1:]))
     with pytest.raises(ValueError, match="step must be one of"):
         BI.improved_unit("test_bench", 1, "teleport")
 
@@ -120,8 +122,19 @@ def on_the_box(monkeypatch, box_plan):
     machine, plan = box_plan
     params = OnlineParams(dust=DustParams(spacing=0.1))
     monkeypatch.setattr(BO, "load_machine", lambda scene: machine)
-    monkeypatch.setattr(BI, "improved_plan", lambda scene, limits, *, fast: plan)
-    monkeypatch.setattr(BI, "_plan_of", lambda unit: plan)
+    plans = {(): plan}
+
+    def improved_plan(scene, limits, *, fast):  # the box, for the step's robot and parameters
+        if limits not in plans:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                full = plan_inspection(machine, robot=BI.improved_robot(limits),
+                                       params=BI.improved_inspection_params(limits, fast=True))
+            plans[limits] = dataclasses.replace(full, pose_set=full.pose_set.head(3))
+        return plans[limits]
+
+    monkeypatch.setattr(BI, "improved_plan", improved_plan)
+    monkeypatch.setattr(BI, "_plan_of", lambda unit: improved_plan(unit[1], unit[2], fast=True))
     monkeypatch.setattr(BI, "online_params", lambda reading, *, fast: params)
 
 
@@ -132,11 +145,14 @@ def test_an_improved_run_counts_every_uncleaned_heap_under_one_cause(on_the_box)
     row = runs.iloc[0]
     assert row.step == "concave_approach" and row.heaps > 0
     assert row[list(CAUSES)].sum() == row.heaps - row.cleaned
+    # the long tube's plan runs only on the long-tube robot
+    with pytest.raises(ValueError, match="is not the plan's robot"):
+        BO.run_trial(BO.load_machine("box"), BI.improved_plan("box", BI.LIMITS, fast=True), seed=2)
 
 
 def _runs() -> pd.DataFrame:
     rows = []
-    for step, means in (("paper", (85.0, 75.0)), ("combined", (97.0, 96.0))):
+    for step, means in (("paper", (85.0, 75.0)), ("concave_approach", (97.0, 96.0))):
         for scene, mean in zip(("a", "b"), means):
             for seed, noise in zip((1, 2, 3), (-1.0, 0.0, 1.0)):
                 rows.append(dict(step=step, scene=scene, seed=seed, C=0.8, guards=30, heaps=100,
@@ -147,13 +163,13 @@ def _runs() -> pd.DataFrame:
 
 def test_summary_pools_both_scenes_and_meets_the_goal_only_on_every_scene():
     s = BI.improved_summary(_runs().iloc[::-1])
-    assert s.step.tolist() == ["paper"] * 3 + ["combined"] * 3
+    assert s.step.tolist() == ["paper"] * 3 + ["concave_approach"] * 3
     assert s.scene.tolist()[2::3] == ["both", "both"]
     both = s[s.scene == "both"].set_index("step")
     assert both.cleaning_pct.tolist() == pytest.approx([80.0, 96.5]) and both.trials.tolist() == [6, 6]
-    assert s.groupby("step").meets_goal.all().to_dict() == {"combined": True, "paper": False}
+    assert s.groupby("step").meets_goal.all().to_dict() == {"concave_approach": True, "paper": False}
     vs = BI.improved_vs_paper(s)
-    assert vs.best_step.tolist() == ["combined", "combined"]
+    assert vs.best_step.tolist() == ["concave_approach", "concave_approach"]
     assert dict(zip(vs.scene, vs.ours_best)) == {"a": 97.0, "b": 96.0}
 
 
