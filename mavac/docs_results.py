@@ -785,8 +785,9 @@ def beyond_robustness() -> Part:
 
 def _tube_blind_spot() -> str:
     tube = _read("beyond_improved_tube.csv", ("tube", "tube_length_m", "guard_standoff_m", "blind_spot_pct"))
+    names = {"paper": "the paper's tube", "long_tube": "the long tube"}
     return "The long tube's cost: " + "; ".join(
-        f"{r.tube.replace('_', ' ')} tube {_fmt(r.tube_length_m)} m, guards {_fmt(r.guard_standoff_m)} m off, "
+        f"{names.get(r.tube, r.tube)} {_fmt(r.tube_length_m)} m, guards {_fmt(r.guard_standoff_m)} m off, "
         f"{_fmt(r.blind_spot_pct)} % of the image hidden by the tool" for r in tube.itertuples()) + ". "
 
 
@@ -797,25 +798,27 @@ def beyond_improved() -> Part:
     cols = ("step", "scene", "trials", "C", "guards", "cleaning_pct", "cleaning_pct_low", "cleaning_pct_high",
             "sim_time_s", "hidden", "no approach found", "vacuum missed", "meets_goal")
     ours = _read("beyond_improved.csv", cols)
-    rows = [[r.step.replace("_", " "), r.scene.replace("_", " "), _fmt(r.C), _fmt(r.guards),
+    rows = [[r.step.replace("_", " "), _label(r.scene), _fmt(r.C), _fmt(r.guards),
              f"{_fmt(r.cleaning_pct)} [{_fmt(r.cleaning_pct_low)}, {_fmt(r.cleaning_pct_high)}]", _fmt(r.sim_time_s),
              _fmt(r.hidden), _fmt(r["no approach found"]), _fmt(r["vacuum missed"])]
             for _, r in ours.iterrows()]
-    body = _table(["step", "scene", "plan C", "guards", "heaps cleaned (%) [95 % interval]", "simulated time (s)",
-                   "hidden", "no approach found", "vacuum missed"], rows)
+    body = _table(["step (each keeps the ones above)", "scene", "plan C", "guards",
+                   "heaps cleaned (%) [95 % interval]", "simulated time (s)", "hidden", "no approach found",
+                   "vacuum missed"], rows)
     body += (f"\n\n**SIMULATED**, the paper's reading, {int(ours['trials'].min())} seeds per scene (`both` pools the "
-             "two scenes' trials); the last three columns are miss causes, mean heaps per trial. "
+             "two scenes' trials); the last three columns are miss causes, mean heaps per trial. Plan C is counted "
+             "in each plan's own FOV pyramid, which the long tube deepens with the guards' stand-off. "
              + _tube_blind_spot() + _source("beyond_improved.csv", paper=False))
     both = ours[ours["scene"] == "both"].set_index("step")
-    best = both["cleaning_pct"].idxmax()
-    goal = ours[ours["step"] == best]["meets_goal"].astype(str).iloc[0] == "True"
-    found = (f"heaps cleaned (both scenes) paper step {_fmt(both.loc['paper', 'cleaning_pct'])} %, "
-             + ", ".join(f"{s.replace('_', ' ')} {_fmt(both.loc[s, 'cleaning_pct'])} %" for s in both.index
-                         if s != "paper")
-             + f"; best ({best.replace('_', ' ')}) {'meets' if goal else 'misses'} the {GOAL_PCT:.0f} % goal on "
-             + ", ".join(f"{r.scene.replace('_', ' ')} {_fmt(r.cleaning_pct)} %"
-                         for r in ours[(ours['step'] == best) & (ours['scene'] != 'both')].itertuples())
-             + f" at {_fmt(both.loc[best, 'sim_time_s'] / both.loc['paper', 'sim_time_s'])}x the paper step's time")
+    last = both.index[-1]
+    scenes = ours[(ours["step"] == last) & (ours["scene"] != "both")]
+    met = str(scenes["meets_goal"].iloc[0]) == "True"
+    found = ("heaps cleaned (both scenes), one limit lifted a step: "
+             + ", ".join(f"{'' if s == 'paper' else '+ '}{s.replace('_', ' ')} {_fmt(both.loc[s, 'cleaning_pct'])} %"
+                         for s in both.index)
+             + f" at {_fmt(both.loc[last, 'sim_time_s'] / both.loc['paper', 'sim_time_s'])}× the paper step's time; "
+             + f"the {GOAL_PCT:.0f} % goal on every scene {'met' if met else 'missed'} ("
+             + ", ".join(f"{_label(r.scene)} {_fmt(r.cleaning_pct)} %" for r in scenes.itertuples()) + ")")
     return Part(body, "84 % of heaps; the tool too large inside the milling machine's box (no number)", found)
 
 
