@@ -206,6 +206,39 @@ def _ur10_description():
     return example_robot_data.load("ur10")
 
 
+def _add_vacuum_tool(model, collision, visual, L: float) -> None:
+    """MAVAC's vacuum tool on the flange ``tool0``: a tube of length ``L`` (m) ending in the sphere
+    (frame ``tool_tip``), and the Azure Kinect on top of the tube (frame ``camera``), with their
+    collision geometry and inertia."""
+    flange_id = model.getFrameId("tool0")
+    flange = model.frames[flange_id]
+    joint = flange.parentJoint
+    joint_T_flange = flange.placement
+    tool_grey = (0.75, 0.75, 0.8, 1.0)
+    tube = _geometry(
+        "tool_tube", joint, flange_id, coal.Cylinder(TOOL_TUBE_RADIUS, L), joint_T_flange * _translation(z=L / 2),
+        tool_grey,
+    )
+    sphere = _geometry(
+        "tool_sphere", joint, flange_id, coal.Sphere(TOOL_SPHERE_RADIUS),
+        joint_T_flange * _translation(z=L), tool_grey,
+    )
+    _add_to_both(collision, visual, tube)
+    _add_to_both(collision, visual, sphere)
+    joint_T_tip = joint_T_flange * _translation(z=L)
+    model.addFrame(pin.Frame("tool_tip", joint, flange_id, joint_T_tip, pin.FrameType.OP_FRAME))
+    # Camera on top of the tube (flange +x side), near the flange; camera x = tool z,
+    # camera y = tool y, camera z = -tool x (right-handed).
+    flange_R_camera = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    cam_offset = TOOL_TUBE_RADIUS + KINECT_SIZE[2] / 2 + 0.005
+    flange_T_camera = pin.SE3(flange_R_camera, np.array([cam_offset, 0.0, 0.06]))
+    joint_T_camera = joint_T_flange * flange_T_camera
+    model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_camera, pin.FrameType.OP_FRAME))
+    camera_body = _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_camera, (0.1, 0.1, 0.1, 1.0))
+    _add_to_both(collision, visual, camera_body)
+    _add_tool_inertia(model, joint, joint_T_flange, joint_T_camera, L)
+
+
 def ur10_mobile(*, tube_length: float = TOOL_TUBE_LENGTH) -> RobotModel:
     """UR10 (example-robot-data) on a MiR200-sized SE(2) base, with vacuum tool and camera.
 
@@ -244,33 +277,7 @@ def ur10_mobile(*, tube_length: float = TOOL_TUBE_LENGTH) -> RobotModel:
         _geometry("mir200_base", 0, root_frame, box, _translation(z=MIR200_SIZE[2] / 2), (0.3, 0.3, 0.35, 1.0)),
     )
 
-    flange_id = model.getFrameId("tool0")
-    flange = model.frames[flange_id]
-    joint = flange.parentJoint
-    joint_T_flange = flange.placement
-    tool_grey = (0.75, 0.75, 0.8, 1.0)
-    tube = _geometry(
-        "tool_tube", joint, flange_id, coal.Cylinder(TOOL_TUBE_RADIUS, L), joint_T_flange * _translation(z=L / 2),
-        tool_grey,
-    )
-    sphere = _geometry(
-        "tool_sphere", joint, flange_id, coal.Sphere(TOOL_SPHERE_RADIUS),
-        joint_T_flange * _translation(z=L), tool_grey,
-    )
-    _add_to_both(collision, visual, tube)
-    _add_to_both(collision, visual, sphere)
-    joint_T_tip = joint_T_flange * _translation(z=L)
-    model.addFrame(pin.Frame("tool_tip", joint, flange_id, joint_T_tip, pin.FrameType.OP_FRAME))
-    # Camera on top of the tube (flange +x side), near the flange; camera x = tool z,
-    # camera y = tool y, camera z = -tool x (right-handed).
-    flange_R_camera = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-    cam_offset = TOOL_TUBE_RADIUS + KINECT_SIZE[2] / 2 + 0.005
-    flange_T_camera = pin.SE3(flange_R_camera, np.array([cam_offset, 0.0, 0.06]))
-    joint_T_camera = joint_T_flange * flange_T_camera
-    model.addFrame(pin.Frame("camera", joint, flange_id, joint_T_camera, pin.FrameType.OP_FRAME))
-    camera_body = _geometry("camera_body", joint, flange_id, coal.Box(*KINECT_SIZE), joint_T_camera, (0.1, 0.1, 0.1, 1.0))
-    _add_to_both(collision, visual, camera_body)
-    _add_tool_inertia(model, joint, joint_T_flange, joint_T_camera, L)
+    _add_vacuum_tool(model, collision, visual, L)
 
     # Elbow up, tool tip ~(1.0, 0, 0.8) m pointing forward and 60 deg down, wrist away from
     # q5 = 0 (wrist singularity); a high-maneuverability IK solution for that target.
