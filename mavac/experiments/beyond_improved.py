@@ -32,6 +32,7 @@ Every trial goes through :func:`mavac.experiments.beyond_online.run_units`; the 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -47,7 +48,8 @@ from ..validate import check_sequence
 from ..vision.camera import fov_pyramid_corners
 from ..viz.plots import new_figure
 from .beyond_online import adaptive_unit, mean_ci, run_units
-from .mavac_online import FAST_POSES, SCENES, geometry_digest, inspection_params, online_params, paper_scene_means
+from .mavac_online import (FAST_POSES, SCENES, geometry_digest, inspection_params, offline_plan, online_params,
+                           paper_scene_means)
 
 #: the limits lifted, each one change to the paper's trial
 LIMITS = ("raycast", "detection_guards", "long_tube", "concave_approach")
@@ -123,10 +125,18 @@ def enclosure_tube_length(robot: RobotModel | None = None) -> float:
     machine's enclosure (one sphere radius off its back wall and floor) from the top edge of its
     open front, with the camera body still outside: the camera front (:func:`camera_front`) plus
     that diagonal. The enclosure is our SRM-20 stand-in's (:mod:`mavac.geometry.machines`)."""
-    robot = ur10_mobile() if robot is None else robot
+    if robot is None:
+        return _enclosure_tube_length_ur10()
     depth = MILL_BODY_SIZE[1] - MILL_BACK - TOOL_SPHERE_RADIUS
     height = MILL_BODY_SIZE[2] - 2 * MILL_SLAB - TOOL_SPHERE_RADIUS
     return math.ceil(100.0 * (camera_front(robot) + math.hypot(depth, height))) / 100.0
+
+
+@functools.cache
+def _enclosure_tube_length_ur10() -> float:
+    """:func:`enclosure_tube_length` of the package's robot, built once per process (each step's
+    parameters, plan and robot ask for it)."""
+    return enclosure_tube_length(ur10_mobile())
 
 
 def long_tube_inspection_params(params: InspectionParams, tube_length: float) -> InspectionParams:
@@ -239,7 +249,7 @@ def improved_params(limits: tuple, *, fast: bool = False) -> OnlineParams:
 
 
 def improved_items(*, scenes=SCENES, seeds=range(1, 4), steps=tuple(STEPS), fast: bool = False) -> list[tuple]:
-    """The online trials of Part 4: every step on every scene and seed (:func:`improved_unit`)."""
+    """The online trials of Part 5: every step on every scene and seed (:func:`improved_unit`)."""
     scenes, seeds, steps = (check_sequence(n, v) for n, v in (("scenes", scenes), ("seeds", seeds), ("steps", steps)))
     for step in steps:
         _check_step(step)
@@ -247,8 +257,6 @@ def improved_items(*, scenes=SCENES, seeds=range(1, 4), steps=tuple(STEPS), fast
 
 
 def _plan_of(unit: tuple):
-    from .mavac_online import offline_plan
-
     if unit[0] == "improved":
         return improved_plan(unit[1], unit[2], fast=unit[-1])
     return offline_plan(unit[1], "paper", offline=unit[2], fast=unit[-1])
