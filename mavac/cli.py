@@ -538,7 +538,7 @@ def _scrub_cell(args):
     """``scrub``'s cell parameters and operating parameters, checked before any work."""
     from .params import BimanualCellParams
     from .scrubbing.holding import check_payload
-    from .scrubbing.run import paper_lissajous
+    from .experiments.kabir_bimanual import paper_lissajous
 
     cell = BimanualCellParams(part_mass=args.mass, max_rounds=args.rounds)
     check_payload(cell)
@@ -562,7 +562,8 @@ def _narrowed_cell(cell, part):
 
 def cmd_scrub(args) -> int:
     """Kabir et al.'s two-arm cell on a stained part, simulated: plan, hold, scrub, look, re-plan."""
-    from .scrubbing.run import run_part
+    from .experiments.kabir_bimanual import run_params
+    from .scrubbing.run import cell_plan, run_part
     from .seeding import check_seed
 
     stem = Path(args.part).stem
@@ -581,7 +582,8 @@ def cmd_scrub(args) -> int:
             _next(bar, "placing the setup square")
             cell = _narrowed_cell(cell, part)
         _next(bar, "planning and scrubbing")
-        run = _unrepeated(lambda: run_part(part, fast=args.fast, lissajous=lissajous, seed=args.seed, cell=cell,
+        params = run_params(lissajous, fast=args.fast, cell=cell)
+        run = _unrepeated(lambda: run_part(part, cell_plan(part, params), params=params, seed=args.seed,
                                            snapshots=False),
                           listed=lambda run: [w for plan in run.plans for w in plan.warnings])  # each round re-plans
         _next(bar, "writing")

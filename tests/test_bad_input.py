@@ -530,7 +530,7 @@ def _cases_issue33_api():
     from mavac.geometry.machines import load_machine
     from mavac.parallel import map_trials
     from mavac.scrubbing.gpr import random_search
-    from mavac.scrubbing.run import run_part
+    from mavac.experiments.kabir_bimanual import run_paper_part
 
     def trial(plan, **kw):
         return run_trial(load_machine("test_bench"), plan, **kw)
@@ -539,9 +539,9 @@ def _cases_issue33_api():
         refuse("unnamed", "run_trial-plan-None", lambda: trial(None), TypeError, "plan"),
         refuse("unnamed", "run_trial-plan-str", lambda: trial("plan"), TypeError, "plan"),
         refuse("unnamed", "run_trial-robot-str", lambda: trial(None, robot="x"), TypeError, "robot"),
-        refuse("unnamed", "run_part-teapot", lambda: run_part("teapot", fast=True), ValueError, "part"),
-        refuse("unnamed", "run_part-42", lambda: run_part(42, fast=True), TypeError, "part"),
-        refuse("accepted", "run_part-fast-str", lambda: run_part("bowl", fast="no"), TypeError, "fast"),
+        refuse("unnamed", "run_part-teapot", lambda: run_paper_part("teapot", fast=True), ValueError, "part"),
+        refuse("unnamed", "run_part-42", lambda: run_paper_part(42, fast=True), TypeError, "part"),
+        refuse("accepted", "run_part-fast-str", lambda: run_paper_part("bowl", fast="no"), TypeError, "fast"),
         refuse("accepted", "run_trials-trials-1.5", lambda: run_trials(trials=1.5), ValueError, "trials"),
         refuse("accepted", "run_trials-trials--3", lambda: run_trials(trials=-3), ValueError, "trials"),
         refuse("hang", "run_trials-trials-1e12", lambda: run_trials(trials=10**12), ValueError, "trials"),

@@ -4,10 +4,9 @@
 import numpy as np
 import pytest
 
-from mavac.experiments.kabir_bimanual import PARTS, paper_thresholds
+from mavac.experiments.kabir_bimanual import PARTS, paper_operation, paper_thresholds
 from mavac.params import PRESTON, BimanualCellParams, ScrubModel
 from mavac.scrubbing.coupon import CouponCell, calibrated_preston
-from mavac.scrubbing.run import paper_operation
 
 
 @pytest.fixture(scope="module")

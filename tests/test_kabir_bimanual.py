@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from mavac.experiments.kabir_bimanual import EXECUTION_COLUMNS, execution_table, summary_table
+from mavac.scrubbing.run import PartRun
 
 
 def _row(commanded, contact, error_all, rms_all, error_contact, rms_contact, **other):
@@ -19,9 +20,9 @@ def _row(commanded, contact, error_all, rms_all, error_contact, rms_contact, **o
 
 
 def _run(rows):
-    execution = SimpleNamespace(rows=rows, setup_times=[10.0])
-    return SimpleNamespace(execution=execution, lissajous=SimpleNamespace(f_n=10.0), stain_removed=0.9, rounds=0,
-                           unseen_faces=0, seconds=1.0)
+    execution = SimpleNamespace(rows=rows, setup_times=[10.0], setups=[{}])
+    state = SimpleNamespace(images=[dict(residue_fraction=0.1)])
+    return PartRun("hull", [], execution, state, 0, 0.9, 0, SimpleNamespace(f_n=10.0), 1.0)
 
 
 def test_summary_weights_every_commanded_step_and_keeps_the_worst_pass():
@@ -30,7 +31,7 @@ def test_summary_weights_every_commanded_step_and_keeps_the_worst_pass():
     runs = {("hull", "learned"): _run([good, bad]), ("hull", "paper"): _run([good])}
     ex = execution_table(runs)
     assert list(ex.columns) == EXECUTION_COLUMNS and len(ex) == 3
-    s = summary_table(runs, ex).set_index("parameters")
+    s = summary_table(runs).set_index("parameters")
     assert s.loc["learned", "duty_min"] == pytest.approx(0.4)
     assert s.loc["learned", "duty"] == pytest.approx(940 / 1000)
     assert s.loc["learned", "force_error_all"] == pytest.approx(-0.06)  # over all 1000 commanded steps

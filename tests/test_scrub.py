@@ -6,11 +6,11 @@ import numpy as np
 import pybullet as p
 import pytest
 
+from mavac.experiments.kabir_bimanual import paper_lissajous, run_paper_part
 from mavac.params import BimanualCellParams, ToolpathParams
 from mavac.robots.kinematics import ik_axis
 from mavac.scrubbing.cell import HOLDER_SEED, cell_robots, holder_ik
 from mavac.scrubbing.coupon import CouponCell, coupon_part
-from mavac.scrubbing.run import paper_lissajous
 from mavac.scrubbing.scene import move_holder, open_cell, world_T_part
 from mavac.scrubbing.scrub import Schedule, approach, check_force_limits, run_schedule, schedule_for_pass
 from mavac.scrubbing.toolpath import PassPath
@@ -120,32 +120,60 @@ def test_schedule_alternates_contact_and_repositioning():
     assert np.allclose(s.rotations[s.contact][:, :, 2], [0.0, 0.0, -1.0])  # pad axis into the surface
 
 
-def test_run_part_validates_its_parameters_before_loading_anything():
-    from mavac.scrubbing.run import run_part
+def test_run_part_parameters_are_one_checked_bundle():
+    from mavac.scrubbing.run import PartRunParams
 
     with pytest.raises(TypeError, match="cell"):
-        run_part("bowl", fast=True, cell=ToolpathParams())
+        PartRunParams(BOWL, cell=ToolpathParams())
     with pytest.raises(TypeError, match="toolpath"):
-        run_part("bowl", fast=True, toolpath=CELL)
+        PartRunParams(BOWL, toolpath=CELL)
     with pytest.raises(TypeError, match="lissajous"):
-        run_part("bowl", fast=True, lissajous=(0.3, 10.0, 5000.0, 7.0, 30.0))
-    with pytest.raises(ValueError, match="seed"):
-        run_part("bowl", fast=True, seed=-1)
-    with pytest.raises(ValueError, match=r"part_mass must be at most 7 kg, the holding arm's rated payload"):
-        run_part("bowl", fast=True, cell=BimanualCellParams(part_mass=7.5))
+        PartRunParams((0.3, 10.0, 5000.0, 7.0, 30.0))
+    with pytest.raises(ValueError, match="max_setups"):
+        PartRunParams(BOWL, max_setups=0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        PartRunParams(BOWL).max_setups = 2
 
 
-def test_run_part_takes_a_users_part_only_with_its_operating_parameters():
+def test_run_part_takes_any_part_with_its_own_plan_and_refuses_bad_input_before_simulating():
     import trimesh
 
     from mavac.geometry.stain_marking import mark_stain
-    from mavac.scrubbing.run import run_part
+    from mavac.scrubbing.run import PartRunParams, cell_plan, run_part
 
     part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 60))
-    with pytest.raises(ValueError, match="lissajous is required for a user's part"):
-        run_part(part, fast=True)
-    with pytest.raises(TypeError, match="part must be a part name"):
-        run_part(part.mesh, fast=True)
+    params = PartRunParams(paper_lissajous("hull"), cell=dataclasses.replace(CELL, max_rounds=0), max_setups=1)
+    plan = cell_plan(part, params)
+    with pytest.raises(TypeError, match="part"):
+        run_part(part.mesh, plan, params=params)
+    with pytest.raises(TypeError, match="plan"):
+        run_part(part, plan.setups, params=params)
+    with pytest.raises(TypeError, match="params"):
+        run_part(part, plan, params=CELL)
+    with pytest.raises(ValueError, match="seed"):
+        run_part(part, plan, params=params, seed=-1)
+    other = dataclasses.replace(plan, part_name="bowl")
+    with pytest.raises(ValueError, match="plan is for part 'bowl'"):
+        run_part(part, other, params=params)
+    heavy = PartRunParams(BOWL, cell=BimanualCellParams(part_mass=7.5))
+    with pytest.raises(ValueError, match=r"part_mass must be at most 7 kg, the holding arm's rated payload"):
+        run_part(part, plan, params=heavy)
+    run = run_part(part, plan, params=params, snapshots=False)
+    assert run.plans[0] is plan and len(run.execution.setups) <= 1
+    row = run.row()
+    assert row["part"] == part.name and row["status"] == run.status and row["passes"] == len(run.execution.rows)
+    if row["passes"]:
+        assert row["duty_min"] == min(r["duty"] for r in run.execution.rows)
+
+
+def test_the_paper_parts_take_their_operating_parameters_from_the_paper():
+    from mavac.experiments.kabir_bimanual import paper_operation
+
+    assert paper_lissajous("hull").f_n == paper_operation("hull")[1]
+    with pytest.raises(ValueError, match="part must be one of"):
+        paper_operation("teapot")
+    with pytest.raises(ValueError, match="part must be one of"):
+        run_paper_part("teapot", fast=True)
 
 
 def test_a_setup_the_holding_arm_cannot_reach_is_skipped_with_a_note(monkeypatch):
@@ -156,7 +184,7 @@ def test_a_setup_the_holding_arm_cannot_reach_is_skipped_with_a_note(monkeypatch
         raise SetupMotionError("no collision-free setup motion of the holding arm: test")
 
     monkeypatch.setattr(run_module, "execute_setup", unreachable)
-    run = run_module.run_part("hull", fast=True, snapshots=False)
+    run = run_paper_part("hull", fast=True, snapshots=False)
     assert run.status == "no setup" and not run.execution.rows
     assert run.notes == ["round 0 setup 1 skipped: no collision-free setup motion of the holding arm: test"]
     assert run.stain_removed == 0.0 and run.to_dict()["setups"] == []
@@ -341,22 +369,21 @@ def test_replanning_stops_when_a_round_makes_no_progress(monkeypatch):
 
     monkeypatch.setattr(run_module, "execute_setup", nothing_removed)
     part = mark_stain(trimesh.creation.icosphere(subdivisions=3, radius=0.06), cone=((0, 0, 1), 40))
-    run = run_module.run_part(part, fast=False, lissajous=run_module.paper_lissajous("hull"), snapshots=False)
+    params = run_module.PartRunParams(paper_lissajous("hull"))
+    run = run_module.run_part(part, run_module.cell_plan(part, params), params=params, snapshots=False)
     assert run.rounds == 0 and rounds and all(label.startswith("round 0") for label in rounds)
     assert "round 0: no progress" in run.notes[-1]
 
 
 def test_a_setup_whose_pass_start_the_cleaning_arm_cannot_reach_is_noted_not_fatal(monkeypatch):
     import mavac.scrubbing.scrub as scrub_module
-    from mavac.scrubbing.run import run_part
-
     def no_solution(model, points, axes, **kwargs):
         res = ik_axis(model, points, axes, **kwargs)
         res.success[:] = False
         return res
 
     monkeypatch.setattr(scrub_module, "ik_axis", no_solution)
-    run = run_part("hull", fast=True, snapshots=False)
+    run = run_paper_part("hull", fast=True, snapshots=False)
     assert run.status == "residue left" and not run.execution.rows and run.stain_removed == 0.0
     assert len(run.notes) == 1 and run.notes[0].startswith("round 0 setup 1 presented but not scrubbed: the cleaning "
                                                            "arm cannot reach the start of the tool path at [")
@@ -422,7 +449,8 @@ def test_a_bowl_stained_inside_is_scrubbed_where_the_pad_reaches():
 
     from mavac.geometry.parts import load_part
     from mavac.geometry.stain_marking import mark_stain
-    from mavac.scrubbing.run import paper_lissajous, run_part
+    from mavac.experiments.kabir_bimanual import run_params
+    from mavac.scrubbing.run import cell_plan, run_part
 
     mesh = load_part("bowl").mesh.copy()  # the paper's bowl stands upside down: turn it upright
     mesh.apply_transform(trimesh.transformations.rotation_matrix(np.pi, [1.0, 0.0, 0.0]))
@@ -432,8 +460,9 @@ def test_a_bowl_stained_inside_is_scrubbed_where_the_pad_reaches():
     r = np.hypot(c[:, 0], c[:, 1])
     inside = np.flatnonzero((n[:, 2] > 0.3) & (r > 0.03) & (r < 0.05) & (c[:, 0] > 0.0) & (np.abs(c[:, 1]) < 0.02))
     assert len(inside) > 50 and c[inside, 2].max() < mesh.bounds[1, 2] - 0.03  # well below the rim
-    run = run_part(mark_stain(mesh, faces=inside, passes=1, name="bowl inside"), fast=True,
-                   lissajous=paper_lissajous("bowl"), snapshots=False)
+    part = mark_stain(mesh, faces=inside, passes=1, name="bowl inside")
+    params = run_params(paper_lissajous("bowl"), fast=True)
+    run = run_part(part, cell_plan(part, params), params=params, snapshots=False)
     rows = run.execution.rows
     assert rows and all(row["nonpad_part_steps"] == 0 and row["arm_arm_steps"] == 0 for row in rows)
     assert run.stain_removed > 0.5

@@ -2,11 +2,14 @@
 the tables and figures.
 
 The cell and its loop live in :mod:`mavac.scrubbing` (:func:`mavac.scrubbing.run.run_part`,
-:class:`mavac.scrubbing.coupon.CouponCell`). Here: :func:`learn_on_coupon` runs the GPR
-learner (Sec. VIII) with the paper's thresholds on the coupon; :func:`cell_for_parts` places
-the cell's setup square by the paper's narrowing; the rest tabulates
-(Table VII, ``kabir_execution.csv``) and draws (Figs. 10-13) what
-:func:`mavac.scrubbing.run.run_part` returned.
+:class:`mavac.scrubbing.coupon.CouponCell`) and take any part. Here are the paper's: its bowl
+and hull (:func:`paper_part`), their operating parameters (:func:`paper_lissajous`) and fast
+mode (:func:`run_paper_part`). :func:`learn_on_coupon` runs the GPR learner (Sec. VIII) with the
+paper's thresholds on the coupon; :func:`cell_for_parts` places the cell's setup square by the
+paper's narrowing; the rest tabulates (Table VII, ``kabir_execution.csv``) and draws
+(Figs. 10-13) what :func:`mavac.scrubbing.run.run_part` returned.
+
+Random streams (:mod:`mavac.seeding`): ``"kabir fast stain"`` (the fast-mode stain).
 """
 
 from __future__ import annotations
@@ -16,17 +19,72 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
+from ..geometry.parts import Part, load_part, stain_from_field
 from ..paper import paper_scalar
-from ..params import BimanualCellParams, GPRParams, ToolpathParams
+from ..params import BimanualCellParams, GPRParams, LissajousParams, ToolpathParams
 from ..scrubbing.cell_space import narrowed_cell_space
 from ..scrubbing.coupon import CouponCell, calibrated_preston
 from ..scrubbing.gpr import learn_parameters
 from ..scrubbing.lissajous import vector_excursions
-from ..scrubbing.run import OPERATION, PartRun, paper_operation, part_for_run
+from ..scrubbing.run import OPERATION, PartRun, PartRunParams, cell_plan, run_part
 from ..scrubbing.wear import lissajous_from_vector
-from ..seeding import rng_for
+from ..seeding import check_seed, rng_for
+from ..validate import check_bool, check_instance
 
 PARTS = ("bowl", "hull")
+#: Fast mode: stained faces of the coarse run (ours: a few seconds of scrubbing).
+FAST_STAIN_FACES = 300
+
+
+def paper_operation(part: str) -> tuple[float, ...]:
+    """The operation vector ``(v, f_n [N], kappa [N/m], f_x [Hz], A_x [N])`` Kabir et al. found
+    for ``part`` ("bowl" or "hull", Sec. IX-C), read from ``data/paper_values.csv``."""
+    if part not in PARTS:
+        raise ValueError(f"part must be one of {PARTS} (Kabir et al. give operating parameters for no other), "
+                         f"got {part!r}")
+    return tuple(paper_scalar("kabir", "Sec. IX-C GPR", q, f"part={part}") for q in OPERATION)
+
+
+def paper_lissajous(part: str) -> LissajousParams:
+    """:func:`paper_operation` as LissajousParams."""
+    return lissajous_from_vector(np.asarray(paper_operation(part), float)[None])
+
+
+def paper_part(name: str, *, fast: bool, seed: int = 0) -> Part:
+    """A paper part (:func:`mavac.geometry.parts.load_part`) or, fast, the same mesh with a
+    :data:`FAST_STAIN_FACES`-face stain needing one pass."""
+    part = load_part(name, seed=seed)
+    if not fast:
+        return part
+    stain, _, intensity = stain_from_field(part.mesh, FAST_STAIN_FACES, rng_for(seed, "kabir fast stain"),
+                                           pass_range=(1, 1))
+    return Part(name, part.mesh, stain, np.ones(len(stain), dtype=np.int64), intensity,
+                f"fast mode: {FAST_STAIN_FACES} stain faces")
+
+
+def run_params(lissajous: LissajousParams, *, fast: bool, cell: BimanualCellParams = BimanualCellParams(),
+               toolpath: ToolpathParams = ToolpathParams()) -> PartRunParams:
+    """The run's parameters; fast mode: one hierarchical-sampling level, the first setup only, no
+    re-planning (same code paths)."""
+    if check_bool("fast", fast):
+        check_instance("cell", cell, BimanualCellParams)
+        cell = replace(cell, max_rounds=0, sampling=replace(cell.sampling, max_levels=1))
+    return PartRunParams(lissajous, cell, toolpath, max_setups=1 if fast else None)
+
+
+def run_paper_part(part: str, *, fast: bool, lissajous: LissajousParams | None = None, seed: int = 0,
+                   cell: BimanualCellParams = BimanualCellParams(), toolpath: ToolpathParams = ToolpathParams(),
+                   snapshots: bool = True) -> PartRun:
+    """:func:`mavac.scrubbing.run.run_part` on the paper's ``part`` ("bowl" or "hull",
+    :func:`paper_part`), with ``lissajous`` or, by default, the paper's operating parameters for it
+    (:func:`paper_lissajous`)."""
+    check_instance("part", part, str)
+    if part not in PARTS:
+        raise ValueError(f"part must be one of {PARTS} (Kabir et al.'s parts), got {part!r}")
+    params = run_params(paper_lissajous(part) if lissajous is None else lissajous, fast=fast, cell=cell,
+                        toolpath=toolpath)
+    stained = paper_part(part, fast=fast, seed=check_seed(seed))
+    return run_part(stained, cell_plan(stained, params), params=params, seed=seed, snapshots=snapshots)
 
 
 def paper_thresholds(part: str) -> tuple[float, float]:
@@ -38,7 +96,7 @@ def cell_for_parts(cell: BimanualCellParams, toolpath: ToolpathParams, *, fast: 
     """``cell`` with its setup square placed by the paper's narrowing (Sec. IV-A) over the stains
     of :data:`PARTS` as :func:`mavac.scrubbing.run.run_part` scrubs them
     (:func:`mavac.scrubbing.cell_space.narrowed_cell_space`), and the narrowing's table."""
-    parts = {p: part_for_run(p, fast=fast, seed=seed) for p in PARTS}
+    parts = {p: paper_part(p, fast=fast, seed=seed) for p in PARTS}
     space, info = narrowed_cell_space(parts, cell, toolpath)
     return replace(cell, space=space), info
 
@@ -143,39 +201,11 @@ def execution_table(runs: dict) -> pd.DataFrame:
     return df[EXECUTION_COLUMNS]
 
 
-def summary_table(runs: dict, execution: pd.DataFrame) -> pd.DataFrame:
-    """Per part and parameter set (keys of ``runs`` as in :func:`execution_table`; its table
-    ``execution``): stain removed, re-plan rounds, and over ALL passes the least duty, the force
-    errors over all commanded steps and over contact steps (step-weighted), the integral's
-    saturated share, the contact steps no plan allows, failed passes and the deepest wear
-    (SIMULATED)."""
-    rows = []
-    for (name, source), run in runs.items():
-        ex = execution[(execution["part"] == name) & (execution["parameters"] == source)]
-        cmd, on = ex["commanded_steps"].to_numpy(), ex["contact_steps"].to_numpy()
-        f_n = run.lissajous.f_n
-        rows.append(dict(part=name, parameters=source, stain_removed=run.stain_removed, replan_rounds=run.rounds,
-                         setups_executed=len(run.execution.setup_times), passes=len(ex), f_n_commanded=f_n,
-                         duty_min=ex["duty"].min(), duty=on.sum() / cmd.sum(),
-                         force_error_all=_weighted(ex["force_error_all"], cmd),
-                         force_rms_all=np.sqrt(_weighted(ex["force_rms_all"] ** 2, cmd)),
-                         force_error_contact=_weighted(ex["force_error_contact"], on),
-                         force_rms_contact=np.sqrt(_weighted(ex["force_rms_contact"] ** 2, on)),
-                         integral_saturated_share=ex["integral_saturated_steps"].sum() / cmd.sum(),
-                         nonpad_part_steps=ex["nonpad_part_steps"].sum(), arm_arm_steps=ex["arm_arm_steps"].sum(),
-                         arm_floor_steps=ex["arm_floor_steps"].sum(), failed_passes=int(ex["failed"].sum()),
-                         pad_touch_outside_steps=ex["pad_touch_outside_steps"].sum(),
-                         wear_depth_max_mm=ex["wear_depth_max_mm"].max(),
-                         residue_final=run.execution.rows[-1]["residue_fraction"] if run.execution.rows else np.nan,
-                         faces_unseen=run.unseen_faces, wall_s=run.seconds))
-    return pd.DataFrame(rows)
-
-
-def _weighted(values, weights) -> float:
-    """Mean of per-pass ``values`` weighted by their step counts (NaN passes left out)."""
-    v, w = np.asarray(values, float), np.asarray(weights, float)
-    ok = np.isfinite(v) & (w > 0)
-    return float((v[ok] * w[ok]).sum() / w[ok].sum()) if ok.any() else float("nan")
+def summary_table(runs: dict) -> pd.DataFrame:
+    """Per part and parameter set (keys of ``runs`` as in :func:`execution_table`), the run's
+    :meth:`mavac.scrubbing.run.PartRun.row` (SIMULATED)."""
+    return pd.DataFrame([dict(part=name, parameters=source, **{k: v for k, v in run.row().items() if k != "part"})
+                         for (name, source), run in runs.items()])
 
 
 # ---------------------------------------------------------------- figures and replay
