@@ -161,9 +161,9 @@ def test_run_part_takes_any_part_with_its_own_plan_and_refuses_bad_input_before_
     run = run_part(part, plan, params=params, snapshots=False)
     assert run.plans[0] is plan and len(run.execution.setups) <= 1
     row = run.row()
-    assert row["part"] == part.name and row["status"] == run.status and row["passes"] == len(run.execution.rows)
-    if row["passes"]:
-        assert row["duty_min"] == min(r["duty"] for r in run.execution.rows)
+    assert row["part"] == part.name and row["status"] == run.status and row["passes"] == len(run.execution.rows) > 0
+    assert row["duty_min"] == min(r["duty"] for r in run.execution.rows)
+    assert row["failed_passes"] == sum(r["failed"] for r in run.execution.rows)
 
 
 def test_the_paper_parts_take_their_operating_parameters_from_the_paper():
